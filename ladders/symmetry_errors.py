@@ -1,0 +1,130 @@
+"""Symmetry error estimators of the paper (Sections 2.3, 2.4 and 3).
+
+Each estimator measures how far a numerical implementation of the midpoint and
+of the geodesic symmetry ``s_M(S) = Exp_M(-Log_M(S))`` is from the properties
+that hold exactly in an affine symmetric space:
+
+* midpoint distance: ``d(Exp_T(1/2 Log_T S), Exp_S(1/2 Log_S T))``;
+* centrality: ``d(s_M(T), S)`` with ``M`` the midpoint shot from ``T``;
+* involutivity: ``d(s_M(s_M(S')), S')``;
+* transvectivity: ``d(s_T o s_M(S'), s_M o s_S(S'))`` (eq. 8 of the paper).
+
+The distance is a parameter; the default is the paper's: the L2 (Frobenius)
+norm of the difference of the point arrays, ``|| S_1 - S_2 ||_2``, which for
+landmark shapes is the L2 distance between corresponding nodes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = [
+    "l2_distance",
+    "midpoint_distance",
+    "centrality_error",
+    "involutivity_error",
+    "transvectivity_error",
+    "SymmetryErrors",
+    "symmetry_errors",
+]
+
+Distance = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def l2_distance(space) -> Distance:
+    """The paper's distance: Frobenius norm over the point axes of ``space``.
+
+    Returns a function ``(a, b) -> ||a - b||_2`` that broadcasts over batch axes.
+    """
+    nd = len(space.point_shape)
+
+    def distance(a, b):
+        diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+        return np.sqrt((diff**2).sum(axis=tuple(range(diff.ndim - nd, diff.ndim))))
+
+    return distance
+
+
+def _distance(space, distance):
+    return l2_distance(space) if distance is None else distance
+
+
+def midpoint_distance(space, template, shape, distance: Distance | None = None):
+    """Distance between the midpoints shot from ``template`` and from ``shape``."""
+    d = _distance(space, distance)
+    return d(space.midpoint(template, shape), space.midpoint(shape, template))
+
+
+def centrality_error(space, template, shape, distance: Distance | None = None):
+    """Centrality ``d(s_M(T), S)`` with ``M = Exp_T(1/2 Log_T S)`` (paper, Section 2.3)."""
+    d = _distance(space, distance)
+    m = space.midpoint(template, shape)
+    return d(space.symmetry(m, template), shape)
+
+
+def involutivity_error(space, center, point, distance: Distance | None = None):
+    """Involutivity ``d(s_M(s_M(P)), P)`` (paper, Section 2.4)."""
+    d = _distance(space, distance)
+    return d(space.symmetry(center, space.symmetry(center, point)), point)
+
+
+def transvectivity_error(space, template, shape, other, distance: Distance | None = None):
+    """Transvectivity ``d(s_T o s_M(S'), s_M o s_S(S'))`` with ``M`` the midpoint from ``T``.
+
+    Zero in an affine symmetric space (eq. 8); otherwise its leading term is a
+    covariant derivative of the curvature, ``nabla R`` (see ``docs/validation.md``).
+    """
+    d = _distance(space, distance)
+    m = space.midpoint(template, shape)
+    ladder = space.symmetry(template, space.symmetry(m, other))
+    opposite = space.symmetry(m, space.symmetry(shape, other))
+    return d(ladder, opposite)
+
+
+@dataclass
+class SymmetryErrors:
+    """The four errors of the paper's Section 3 for one triple ``(T, S, S')``."""
+
+    midpoint_distance: np.ndarray
+    centrality: np.ndarray
+    involutivity: np.ndarray
+    transvectivity: np.ndarray
+
+    def as_dict(self) -> dict:
+        return {k: np.asarray(v).tolist() for k, v in asdict(self).items()}
+
+
+def symmetry_errors(space, template, shape, other, distance: Distance | None = None) -> SymmetryErrors:
+    """All four errors of Section 3, sharing intermediate results.
+
+    Parameters
+    ----------
+    space : manifolds.Connection
+    template : point ``T`` (the atlas)
+    shape : point ``S`` (e.g. end-diastole)
+    other : point ``S'`` (e.g. end-systole)
+    distance : callable, optional
+        Defaults to :func:`l2_distance` of ``space``.
+
+    Returns
+    -------
+    SymmetryErrors
+        ``midpoint_distance``, ``centrality``, ``involutivity`` (at the midpoint
+        ``M`` shot from ``T``, applied to ``S'``) and ``transvectivity``.
+    """
+    d = _distance(space, distance)
+    m = space.midpoint(template, shape)
+    m_from_shape = space.midpoint(shape, template)
+    s_m_other = space.symmetry(m, other)
+    return SymmetryErrors(
+        midpoint_distance=d(m, m_from_shape),
+        centrality=d(space.symmetry(m, template), shape),
+        involutivity=d(space.symmetry(m, s_m_other), other),
+        transvectivity=d(
+            space.symmetry(template, s_m_other),
+            space.symmetry(m, space.symmetry(shape, other)),
+        ),
+    )

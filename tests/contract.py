@@ -1,0 +1,198 @@
+"""Generic contract that every space of :mod:`manifolds` must satisfy.
+
+A space's test file subclasses :class:`ConnectionContract` and sets ``space``
+(and, where needed, tolerances or sampling sizes). Properties are checked over
+random points drawn through hypothesis-chosen seeds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from manifolds import ManifoldError, RiemannianManifold
+
+SEEDS = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+class ConnectionContract:
+    """Round trips, symmetry and midpoint properties, batching, bad input."""
+
+    space = None
+    rtol = 1e-10
+    atol = 1e-10
+    tangent_scale = 0.5
+    max_examples = 25
+    n_batch = 5
+
+    # ------------------------------------------------------------- helpers
+    def given_seed(self, check):
+        """Run ``check(rng)`` for hypothesis-chosen seeds."""
+
+        @settings(max_examples=self.max_examples, deadline=None, derandomize=True)
+        @given(SEEDS)
+        def run(seed):
+            check(np.random.default_rng(seed))
+
+        run()
+
+    def pair(self, rng):
+        """A point and a nearby point reached by a tangent of size ~``tangent_scale``."""
+        a = self.space.random_point(rng)
+        v = self.space.random_tangent(a, rng, scale=self.tangent_scale)
+        return a, self.space.exp(a, v), v
+
+    def assert_points_close(self, x, y):
+        np.testing.assert_allclose(x, y, rtol=self.rtol, atol=self.atol)
+
+    def assert_tangents_close(self, u, v):
+        np.testing.assert_allclose(u, v, rtol=self.rtol, atol=self.atol)
+
+    # ------------------------------------------------------------- contract
+    def test_point_shape(self):
+        rng = np.random.default_rng(0)
+        p = self.space.random_point(rng)
+        assert np.shape(p) == tuple(self.space.point_shape)
+        assert np.all(self.space.belongs(p))
+
+    def test_log_of_exp(self):
+        def check(rng):
+            a, b, v = self.pair(rng)
+            self.assert_tangents_close(self.space.log(a, b), v)
+
+        self.given_seed(check)
+
+    def test_exp_of_log(self):
+        def check(rng):
+            a, b, _ = self.pair(rng)
+            self.assert_points_close(self.space.exp(a, self.space.log(a, b)), b)
+
+        self.given_seed(check)
+
+    def test_log_at_self_is_zero(self):
+        def check(rng):
+            a = self.space.random_point(rng)
+            v = self.space.log(a, a)
+            np.testing.assert_allclose(v, np.zeros_like(v), atol=self.atol)
+
+        self.given_seed(check)
+
+    def test_symmetry_fixes_center(self):
+        def check(rng):
+            a = self.space.random_point(rng)
+            self.assert_points_close(self.space.symmetry(a, a), a)
+
+        self.given_seed(check)
+
+    def test_symmetry_is_involution(self):
+        def check(rng):
+            m, p, _ = self.pair(rng)
+            self.assert_points_close(self.space.symmetry(m, self.space.symmetry(m, p)), p)
+
+        self.given_seed(check)
+
+    def test_symmetry_reverses_log(self):
+        def check(rng):
+            m, p, _ = self.pair(rng)
+            s = self.space.symmetry(m, p)
+            self.assert_tangents_close(self.space.log(m, s), -self.space.log(m, p))
+
+        self.given_seed(check)
+
+    def test_midpoint_is_halfway(self):
+        def check(rng):
+            a, b, _ = self.pair(rng)
+            m = self.space.midpoint(a, b)
+            self.assert_tangents_close(self.space.log(a, m), 0.5 * self.space.log(a, b))
+            if isinstance(self.space, RiemannianManifold):
+                d = self.space.dist(a, b)
+                np.testing.assert_allclose(self.space.dist(a, m), 0.5 * d, rtol=1e-8, atol=self.atol)
+                np.testing.assert_allclose(self.space.dist(m, b), 0.5 * d, rtol=1e-8, atol=self.atol)
+
+        self.given_seed(check)
+
+    def test_geodesic_endpoints(self):
+        rng = np.random.default_rng(1)
+        a, b, _ = self.pair(rng)
+        path = self.space.geodesic(a, b)
+        self.assert_points_close(path(0.0), a)
+        self.assert_points_close(path(1.0), b)
+        self.assert_points_close(path(0.5), self.space.midpoint(a, b))
+
+    def test_dist_is_norm_of_tangent(self):
+        if not isinstance(self.space, RiemannianManifold):
+            pytest.skip("not a Riemannian space")
+
+        def check(rng):
+            a, b, v = self.pair(rng)
+            np.testing.assert_allclose(
+                self.space.dist(a, b), self.space.norm(a, v), rtol=1e-8, atol=self.atol
+            )
+
+        self.given_seed(check)
+
+    def test_transport_preserves_inner_product(self):
+        if not isinstance(self.space, RiemannianManifold):
+            pytest.skip("not a Riemannian space")
+
+        def check(rng):
+            a, b, _ = self.pair(rng)
+            u = self.space.random_tangent(a, rng)
+            w = self.space.random_tangent(a, rng)
+            try:
+                tu = self.space.parallel_transport(a, b, u)
+            except NotImplementedError:
+                pytest.skip("no exact parallel transport")
+            tw = self.space.parallel_transport(a, b, w)
+            np.testing.assert_allclose(
+                self.space.inner(b, tu, tw), self.space.inner(a, u, w), rtol=1e-8, atol=1e-9
+            )
+            # The geodesic's own velocity is transported to the velocity at the end.
+            v = self.space.log(a, b)
+            self.assert_tangents_close(
+                self.space.parallel_transport(a, b, v), -self.space.log(b, a)
+            )
+
+        self.given_seed(check)
+
+    def test_batch_equals_loop(self):
+        if not self.space.supports_batch:
+            pytest.skip("space does not broadcast over batch axes")
+        rng = np.random.default_rng(2)
+        pairs = [self.pair(rng) for _ in range(self.n_batch)]
+        a = np.stack([p[0] for p in pairs])
+        b = np.stack([p[1] for p in pairs])
+        v = np.stack([p[2] for p in pairs])
+        sp = self.space
+        checks = [
+            (sp.exp(a, v), [sp.exp(x, y) for x, y in zip(a, v)]),
+            (sp.log(a, b), [sp.log(x, y) for x, y in zip(a, b)]),
+            (sp.symmetry(a, b), [sp.symmetry(x, y) for x, y in zip(a, b)]),
+            (sp.midpoint(a, b), [sp.midpoint(x, y) for x, y in zip(a, b)]),
+        ]
+        if isinstance(sp, RiemannianManifold):
+            checks.append((sp.dist(a, b), [sp.dist(x, y) for x, y in zip(a, b)]))
+            checks.append((sp.inner(a, v, v), [sp.inner(x, y, y) for x, y in zip(a, v)]))
+        for batched, looped in checks:
+            np.testing.assert_allclose(batched, np.stack(looped), rtol=1e-12, atol=1e-13)
+
+    def test_nan_input_raises(self):
+        rng = np.random.default_rng(3)
+        a, b, v = self.pair(rng)
+        bad = np.array(b, dtype=float, copy=True)
+        bad.flat[0] = np.nan
+        with pytest.raises(ManifoldError, match="other"):
+            self.space.log(a, bad)
+        bad_v = np.array(v, dtype=float, copy=True)
+        bad_v.flat[0] = np.nan
+        with pytest.raises(ManifoldError, match="tangent"):
+            self.space.exp(a, bad_v)
+
+    def test_wrong_shape_raises(self):
+        rng = np.random.default_rng(4)
+        a, b, _ = self.pair(rng)
+        wrong = np.zeros(tuple(s + 1 for s in self.space.point_shape))
+        with pytest.raises(ManifoldError, match="other"):
+            self.space.log(a, wrong)
