@@ -1,0 +1,1 @@
+"""Swappable numerical methods used by the spaces (ODE integration, shooting, optimisation)."""
