@@ -145,8 +145,8 @@ class Connection(ABC):
         def path(t):
             t = np.asarray(t, dtype=float)
             if t.ndim == 0:
-                return self.exp(a, t * v)
-            return np.stack([self.exp(a, ti * v) for ti in t])
+                return self.exp(a, float(t) * v)
+            return np.stack([self.exp(a, float(ti) * v) for ti in t])
 
         return path
 
