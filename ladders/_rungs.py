@@ -44,7 +44,9 @@ def check_ladder_args(space, n_rungs, scaling_exponent) -> int:
     if isinstance(n_rungs, bool) or int(n_rungs) != n_rungs or n_rungs < 1:
         raise ValueError(f"n_rungs: expected a positive integer, got {n_rungs!r}")
     if not np.isfinite(scaling_exponent) or scaling_exponent < 0:
-        raise ValueError(f"scaling_exponent: expected a finite number >= 0, got {scaling_exponent!r}")
+        raise ValueError(
+            f"scaling_exponent: expected a finite number >= 0, got {scaling_exponent!r}"
+        )
     return int(n_rungs)
 
 

@@ -97,7 +97,9 @@ class SymmetryErrors:
         return {k: np.asarray(v).tolist() for k, v in asdict(self).items()}
 
 
-def symmetry_errors(space, template, shape, other, distance: Distance | None = None) -> SymmetryErrors:
+def symmetry_errors(
+    space, template, shape, other, distance: Distance | None = None
+) -> SymmetryErrors:
     """All four errors of Section 3, sharing intermediate results.
 
     Parameters

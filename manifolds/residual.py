@@ -116,7 +116,9 @@ class ResidualAugmented(Connection):
 
     def _as_tangent(self, tangent, name: str = "tangent") -> ResidualTangent:
         if isinstance(tangent, ResidualTangent):
-            residual = check_array(tangent.residual, self.point_shape, f"{self.name}: {name}.residual")
+            residual = check_array(
+                tangent.residual, self.point_shape, f"{self.name}: {name}.residual"
+            )
             return ResidualTangent(tangent.tangent, residual)
         # A bare tangent of the wrapped space: zero residual.
         return ResidualTangent(tangent, np.zeros(self.point_shape))
@@ -164,6 +166,4 @@ class ResidualAugmented(Connection):
     def inner(self, point, u, v):
         """Product metric: the wrapped space's inner product plus the Euclidean one on residuals."""
         u, v = self._as_tangent(u, "u"), self._as_tangent(v, "v")
-        return self.base.inner(point, u.tangent, v.tangent) + float(
-            np.sum(u.residual * v.residual)
-        )
+        return self.base.inner(point, u.tangent, v.tangent) + float(np.sum(u.residual * v.residual))

@@ -30,8 +30,7 @@ def check_shape(arr: np.ndarray, trailing: Sequence[int], name: str) -> np.ndarr
     nd = len(trailing)
     if arr.ndim < nd or arr.shape[arr.ndim - nd :] != trailing:
         raise ManifoldError(
-            f"{name}: expected shape (..., {', '.join(map(str, trailing))}) "
-            f"but got {arr.shape}"
+            f"{name}: expected shape (..., {', '.join(map(str, trailing))}) but got {arr.shape}"
         )
     return arr
 

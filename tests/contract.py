@@ -108,8 +108,12 @@ class ConnectionContract:
             self.assert_tangents_close(self.space.log(a, m), 0.5 * self.space.log(a, b))
             if isinstance(self.space, RiemannianManifold):
                 d = self.space.dist(a, b)
-                np.testing.assert_allclose(self.space.dist(a, m), 0.5 * d, rtol=1e-8, atol=self.atol)
-                np.testing.assert_allclose(self.space.dist(m, b), 0.5 * d, rtol=1e-8, atol=self.atol)
+                np.testing.assert_allclose(
+                    self.space.dist(a, m), 0.5 * d, rtol=1e-8, atol=self.atol
+                )
+                np.testing.assert_allclose(
+                    self.space.dist(m, b), 0.5 * d, rtol=1e-8, atol=self.atol
+                )
 
         self.given_seed(check)
 
