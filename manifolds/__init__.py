@@ -10,12 +10,22 @@ from .errors import (
     NotTangentError,
 )
 from .euclidean import Euclidean
+from .hyperbolic import Hyperbolic, minkowski_inner
+from .hypersphere import Hypersphere
+from .residual import ResidualAugmented, ResidualTangent
 from .riemannian import RiemannianManifold
+from .spd import SPDMatrices
 
 __all__ = [
     "Connection",
     "RiemannianManifold",
     "Euclidean",
+    "Hypersphere",
+    "Hyperbolic",
+    "minkowski_inner",
+    "SPDMatrices",
+    "ResidualAugmented",
+    "ResidualTangent",
     "ConvergenceError",
     "ConvergenceWarning",
     "CutLocusError",

@@ -1,0 +1,257 @@
+"""Hyperbolic space ``H^n`` in the hyperboloid model, with closed-form geometry.
+
+A constant-curvature (``K = -1``) symmetric space used to validate the generic
+algorithms of :mod:`ladders` (pole ladder exact, paper eq. 4 with ``nabla R = 0``;
+zero transvectivity error, eq. 8).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import ManifoldError, NotTangentError
+from .riemannian import RiemannianManifold
+from .validation import as_float_array, check_finite, check_shape
+
+__all__ = ["Hyperbolic", "minkowski_inner"]
+
+
+def minkowski_inner(a, b):
+    """Minkowski product ``<a, b>_L = -a_0 b_0 + sum_i a_i b_i`` over the last axis.
+
+    Parameters
+    ----------
+    a, b : array, shape ``(..., n + 1)`` (leading axes broadcast)
+
+    Returns
+    -------
+    array, shape ``(...)``
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    return np.einsum("...i,...i->...", a, b) - 2.0 * a[..., 0] * b[..., 0]
+
+
+def _ratio(num, den):
+    """``num / den`` where ``den > 0`` and ``1`` where ``den == 0`` (a sinc-like limit)."""
+    pos = den > 0
+    return np.where(pos, num / np.where(pos, den, 1.0), 1.0)
+
+
+class Hyperbolic(RiemannianManifold):
+    """Hyperbolic space ``H^n = {x in R^{n+1} : <x, x>_L = -1, x_0 > 0}``.
+
+    Points have shape ``(..., n + 1)``; tangent vectors at ``x`` satisfy
+    ``<x, v>_L = 0`` and the metric is the restriction of ``<., .>_L``
+    (positive definite on tangent spaces). Closed forms, with ``|v|_L =
+    sqrt(<v, v>_L)``:
+
+    * ``Exp_x(v) = cosh|v|_L x + sinh|v|_L / |v|_L v``;
+    * ``Log_x(y) = theta / sinh(theta) w`` with ``w = y + <x, y>_L x``,
+      ``sinh(theta) = |w|_L`` and ``theta = log1p(|w|_L - <x, y - x>_L)``
+      (``= arccosh(-<x, y>_L)``, but accurate for nearby points);
+    * transport ``u + <y, u>_L / (1 - <x, y>_L) (x + y)``;
+    * symmetry ``s_m(z) = -2 <m, z>_L m - z``, midpoint ``(a + b) / |a + b|_L``.
+
+    There is no cut locus. Curvature convention: ``R(u, v) w = nabla_u nabla_v w
+    - nabla_v nabla_u w - nabla_[u,v] w``, sectional curvature ``<R(u, v) v, u> /
+    (|u|^2 |v|^2 - <u, v>^2)``; here ``R(u, v) w = -(<v, w> u - <u, w> v)``
+    (``K = -1``).
+
+    Membership uses a tolerance relative to the size of the point,
+    ``| <x, x>_L + 1 | <= atol x_0^2``, since the hyperboloid coordinates grow
+    like ``e^dist``.
+
+    Parameters
+    ----------
+    n : int
+        Intrinsic dimension.
+    """
+
+    is_symmetric = True
+    supports_batch = True
+    sectional_curvature = -1.0
+
+    def __init__(self, n: int):
+        if isinstance(n, bool) or int(n) != n or n < 1:
+            raise ValueError(f"Hyperbolic: n must be a positive integer, got {n!r}")
+        self.dim = int(n)
+        self.point_shape = (self.dim + 1,)
+
+    def __repr__(self) -> str:
+        return f"Hyperbolic({self.dim})"
+
+    # ------------------------------------------------------------------ checks
+    def _on_sheet(self, arr, tol):
+        x0 = arr[..., 0]
+        return (np.abs(minkowski_inner(arr, arr) + 1.0) <= tol * (x0 * x0)) & (x0 > 0)
+
+    def belongs(self, point, atol: float | None = None):
+        """Whether ``|<x, x>_L + 1| <= atol x_0^2`` and ``x_0 > 0``, per batch entry."""
+        tol = self.atol if atol is None else atol
+        arr = np.asarray(point, dtype=float)
+        if arr.ndim < 1 or arr.shape[-1:] != self.point_shape:
+            return False
+        return self._on_sheet(arr, tol)
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``|<x, v>_L| <= atol (1 + |x| |v|)`` (Euclidean norms)."""
+        tol = self.atol if atol is None else atol
+        x = np.asarray(point, dtype=float)
+        v = np.asarray(vector, dtype=float)
+        if v.ndim < 1 or v.shape[-1:] != self.point_shape:
+            return False
+        scale = 1.0 + np.sqrt(np.einsum("...i,...i->...", x, x) * np.einsum("...i,...i->...", v, v))
+        return np.abs(minkowski_inner(x, v)) <= tol * scale
+
+    def _point(self, point, name: str) -> np.ndarray:
+        """Validated point: one fused test (NaN fails it), full diagnosis on failure."""
+        label = f"{self.name}: {name}"
+        arr = as_float_array(point, label)
+        check_shape(arr, self.point_shape, label)
+        if not self._on_sheet(arr, self.atol).all():
+            return self.check_point(arr, name)
+        return arr
+
+    def _vector(self, vector, name: str) -> np.ndarray:
+        label = f"{self.name}: {name}"
+        arr = as_float_array(vector, label)
+        check_shape(arr, self.point_shape, label)
+        return check_finite(arr, label)
+
+    def _tangent(self, x, v, name: str = "tangent"):
+        """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|_L^2``."""
+        if not np.all(self.is_tangent(x, v)):
+            raise NotTangentError(
+                f"{self.name}: {name} is not tangent at the point: |<point, {name}>_L| up to "
+                f"{np.max(np.abs(minkowski_inner(x, v))):.3g} (tolerance {self.atol:g})"
+            )
+        v = v + minkowski_inner(x, v)[..., None] * x
+        return v, np.maximum(minkowski_inner(v, v), 0.0)
+
+    # ------------------------------------------------------------------ closed forms
+    @staticmethod
+    def _exp(x, v, vv):
+        t = np.sqrt(vv)
+        return np.cosh(t)[..., None] * x + _ratio(np.sinh(t), t)[..., None] * v
+
+    @staticmethod
+    def _log(x, y):
+        d = y - x
+        xd = minkowski_inner(x, d)
+        w = d + xd[..., None] * x
+        wn = np.sqrt(np.maximum(minkowski_inner(w, w), 0.0))
+        theta = np.log1p(wn - xd)
+        return _ratio(theta, wn)[..., None] * w
+
+    def exp(self, point, tangent):
+        """Exponential map ``cosh|v| x + sinh|v|/|v| v`` (accurate for tiny ``v``).
+
+        Parameters
+        ----------
+        point : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point`` (broadcast)
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``
+        """
+        x = self._point(point, "point")
+        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
+        return self._exp(x, v, vv)
+
+    def log(self, point, other):
+        """Logarithm map, defined everywhere.
+
+        Parameters
+        ----------
+        point, other : array, shape ``(..., n + 1)``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``point``
+        """
+        return self._log(self._point(point, "point"), self._point(other, "other"))
+
+    def inner(self, point, u, v):
+        """Minkowski product of tangent vectors, shape ``(...)``."""
+        self._point(point, "point")
+        return minkowski_inner(self._vector(u, "u"), self._vector(v, "v"))
+
+    def dist(self, a, b):
+        """Distance ``2 asinh(|b - a|_L / 2)``, accurate for nearby points."""
+        a = self._point(a, "a")
+        b = self._point(b, "b")
+        d = b - a
+        return 2.0 * np.arcsinh(0.5 * np.sqrt(np.maximum(minkowski_inner(d, d), 0.0)))
+
+    def squared_dist(self, a, b):
+        """Squared geodesic distance."""
+        return self.dist(a, b) ** 2
+
+    def midpoint(self, a, b):
+        """Geodesic midpoint ``(a + b) / sqrt(-<a + b, a + b>_L)`` (paper, Section 2.3)."""
+        s = self._point(a, "a") + self._point(b, "b")
+        return s / np.sqrt(-minkowski_inner(s, s))[..., None]
+
+    def symmetry(self, center, point):
+        """Geodesic symmetry ``s_m(z) = -2 <m, z>_L m - z``."""
+        m = self._point(center, "center")
+        z = self._point(point, "point")
+        return -2.0 * minkowski_inner(m, z)[..., None] * m - z
+
+    def parallel_transport(self, point, end, tangent):
+        """Transport along the geodesic ``point -> end``: ``u + <y,u>_L/(1 - <x,y>_L) (x+y)``.
+
+        Parameters
+        ----------
+        point, end : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``end``
+        """
+        x = self._point(point, "point")
+        y = self._point(end, "end")
+        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+        coef = minkowski_inner(y, u) / (1.0 - minkowski_inner(x, y))
+        return u + coef[..., None] * (x + y)
+
+    def curvature(self, point, u, v, w):
+        """``R(u, v) w = -(<v, w>_L u - <u, w>_L v)`` (``K = -1``, see the class doc)."""
+        self._point(point, "point")
+        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
+        k = self.sectional_curvature
+        return k * (minkowski_inner(v, w)[..., None] * u - minkowski_inner(u, w)[..., None] * v)
+
+    def curvature_derivative(self, point, x, u, v, w):
+        """``(nabla_x R)(u, v) w = 0``: hyperbolic space is a symmetric space."""
+        arrays = [self._point(point, "point")]
+        arrays += [self._vector(a, n) for a, n in ((x, "x"), (u, "u"), (v, "v"), (w, "w"))]
+        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
+
+    # ------------------------------------------------------------------ sampling
+    def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
+        """Point(s) ``(sqrt(1 + |z|^2), z)`` with ``z`` standard Gaussian in ``R^n``."""
+        size = (self.dim,) if n_samples is None else (int(n_samples), self.dim)
+        z = rng.standard_normal(size)
+        x0 = np.sqrt(1.0 + np.einsum("...i,...i->...", z, z))
+        return np.concatenate([x0[..., None], z], axis=-1)
+
+    def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
+        """Gaussian tangent vector(s) at ``point`` with ``E|v|_L^2 = scale^2``.
+
+        An isotropic Gaussian vector is drawn at the origin ``e_0 = (1, 0, ..., 0)``
+        and carried to ``point`` by parallel transport, an isometry.
+        """
+        x = self._point(point, "point")
+        if not np.isfinite(scale) or scale < 0:
+            raise ManifoldError(f"{self.name}: scale must be finite and >= 0, got {scale!r}")
+        g = np.zeros(x.shape)
+        g[..., 1:] = rng.standard_normal((*x.shape[:-1], self.dim)) * (scale / np.sqrt(self.dim))
+        # Transport from the origin e_0 to x is an isometry onto T_x H^n.
+        e0 = np.zeros(self.point_shape)
+        e0[0] = 1.0
+        coef = minkowski_inner(x, g) / (1.0 - minkowski_inner(e0, x))
+        return g + coef[..., None] * (e0 + x)

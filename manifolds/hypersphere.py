@@ -1,0 +1,256 @@
+"""The unit hypersphere ``S^n`` embedded in ``R^{n+1}``, with closed-form geometry.
+
+A constant-curvature (``K = +1``) symmetric space used to validate the generic
+algorithms of :mod:`ladders`: there the pole ladder is exact (paper, eq. 4 has
+``nabla R = 0``) and the transvectivity error of eq. 8 vanishes up to round-off.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import CutLocusError, ManifoldError, NotTangentError
+from .riemannian import RiemannianManifold
+from .validation import as_float_array, check_finite, check_shape
+
+__all__ = ["Hypersphere"]
+
+
+def _dot(a, b):
+    """Euclidean inner product over the last axis, broadcasting the leading axes."""
+    return np.einsum("...i,...i->...", a, b)
+
+
+def _ratio(num, den):
+    """``num / den`` where ``den > 0`` and ``1`` where ``den == 0`` (a sinc-like limit)."""
+    pos = den > 0
+    return np.where(pos, num / np.where(pos, den, 1.0), 1.0)
+
+
+class Hypersphere(RiemannianManifold):
+    """Unit sphere ``S^n = {x in R^{n+1} : |x| = 1}`` with the round metric.
+
+    Points have shape ``(..., n + 1)``; tangent vectors at ``x`` are the vectors
+    ``v`` with ``<x, v> = 0``. All maps have closed forms:
+
+    * ``Exp_x(v) = cos|v| x + sin|v| / |v| v``;
+    * ``Log_x(y) = atan2(|w|, <x, y>) w / |w|`` with ``w = y - <x, y> x``, computed
+      from ``d = y - x`` so that nearby points keep full relative accuracy;
+    * transport from ``x`` to ``y``: ``u - 2 <y, u> / |x + y|^2 (x + y)``;
+    * symmetry ``s_m(z) = 2 <m, z> m - z`` and midpoint ``(a + b) / |a + b|``.
+
+    ``Log`` is undefined at antipodal points (the cut locus): :meth:`log`,
+    :meth:`midpoint` and :meth:`parallel_transport` raise :class:`CutLocusError`
+    when ``|x + y| <= cut_locus_tol`` (``|x + y|`` is, to first order, the geodesic
+    distance of ``y`` to the antipode of ``x``).
+
+    Curvature convention: ``R(u, v) w = nabla_u nabla_v w - nabla_v nabla_u w -
+    nabla_[u,v] w`` and sectional curvature ``<R(u, v) v, u> / (|u|^2 |v|^2 -
+    <u, v>^2)``; here ``R(u, v) w = <v, w> u - <u, w> v`` (``K = +1``).
+
+    Parameters
+    ----------
+    n : int
+        Intrinsic dimension (``S^2`` is the usual sphere in ``R^3``).
+    """
+
+    is_symmetric = True
+    supports_batch = True
+    sectional_curvature = 1.0
+    cut_locus_tol = 1e-8
+
+    def __init__(self, n: int):
+        if isinstance(n, bool) or int(n) != n or n < 1:
+            raise ValueError(f"Hypersphere: n must be a positive integer, got {n!r}")
+        self.dim = int(n)
+        self.point_shape = (self.dim + 1,)
+
+    def __repr__(self) -> str:
+        return f"Hypersphere({self.dim})"
+
+    # ------------------------------------------------------------------ checks
+    def belongs(self, point, atol: float | None = None):
+        """Whether ``| |x|^2 - 1 | <= atol`` (default ``self.atol``), per batch entry."""
+        tol = self.atol if atol is None else atol
+        arr = np.asarray(point, dtype=float)
+        if arr.ndim < 1 or arr.shape[-1:] != self.point_shape:
+            return False
+        return np.abs(_dot(arr, arr) - 1.0) <= tol
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``|<x, v>| <= atol (1 + |v|)`` (default ``self.atol``)."""
+        tol = self.atol if atol is None else atol
+        x = np.asarray(point, dtype=float)
+        v = np.asarray(vector, dtype=float)
+        if v.ndim < 1 or v.shape[-1:] != self.point_shape:
+            return False
+        return np.abs(_dot(x, v)) <= tol * (1.0 + np.sqrt(_dot(v, v)))
+
+    def _point(self, point, name: str) -> np.ndarray:
+        """Validated point: one fused norm test, the full diagnosis only on failure.
+
+        A NaN or infinite entry makes ``|x|^2`` non-finite, so the single test
+        ``| |x|^2 - 1 | <= atol`` covers finiteness and membership at once.
+        """
+        label = f"{self.name}: {name}"
+        arr = as_float_array(point, label)
+        check_shape(arr, self.point_shape, label)
+        if not (np.abs(_dot(arr, arr) - 1.0) <= self.atol).all():
+            return self.check_point(arr, name)
+        return arr
+
+    def _vector(self, vector, name: str) -> np.ndarray:
+        label = f"{self.name}: {name}"
+        arr = as_float_array(vector, label)
+        check_shape(arr, self.point_shape, label)
+        return check_finite(arr, label)
+
+    def _tangent(self, x, v, name: str = "tangent"):
+        """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|^2``.
+
+        The projection only removes the round-off normal component allowed by
+        the tolerance, so that ``Exp`` stays on the sphere to machine precision.
+        """
+        xv = _dot(x, v)
+        vv = _dot(v, v)
+        if not (np.abs(xv) <= self.atol * (1.0 + np.sqrt(vv))).all():
+            raise NotTangentError(
+                f"{self.name}: {name} is not tangent at the point: |<point, {name}>| up to "
+                f"{np.max(np.abs(xv)):.3g} (tolerance {self.atol:g})"
+            )
+        return v - xv[..., None] * x, np.maximum(vv - xv * xv, 0.0)
+
+    def _check_cut(self, at_cut, what: str, first: str = "point", second: str = "other"):
+        """Raise :class:`CutLocusError` if any entry of the boolean ``at_cut`` is set."""
+        if np.any(at_cut):
+            raise CutLocusError(
+                f"{self.name}: {what} is undefined: {second} is antipodal to {first} "
+                f"(|{first} + {second}| <= {self.cut_locus_tol:g}, the cut locus)"
+            )
+
+    # ------------------------------------------------------------------ closed forms
+    @staticmethod
+    def _exp(x, v, vv):
+        t = np.sqrt(vv)
+        return np.cos(t)[..., None] * x + _ratio(np.sin(t), t)[..., None] * v
+
+    def _log(self, x, y):
+        d = y - x
+        xd = _dot(x, d)
+        w = d - xd[..., None] * x
+        wn = np.sqrt(_dot(w, w))
+        c = 1.0 + xd
+        # Near the antipode |w| ~ |x + y| and <x, y> < 0.
+        self._check_cut((wn <= self.cut_locus_tol) & (c < 0.0), "log")
+        return _ratio(np.arctan2(wn, c), wn)[..., None] * w
+
+    def exp(self, point, tangent):
+        """Exponential map ``cos|v| x + sin|v|/|v| v`` (accurate for tiny ``v``).
+
+        Parameters
+        ----------
+        point : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point`` (broadcast)
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``
+        """
+        x = self._point(point, "point")
+        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
+        return self._exp(x, v, vv)
+
+    def log(self, point, other):
+        """Logarithm map with ``atan2`` (full relative accuracy near 0 and near pi).
+
+        Parameters
+        ----------
+        point, other : array, shape ``(..., n + 1)``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``point`` of norm ``dist(point, other)``
+
+        Raises
+        ------
+        CutLocusError
+            If ``other`` is (numerically) antipodal to ``point``.
+        """
+        return self._log(self._point(point, "point"), self._point(other, "other"))
+
+    def inner(self, point, u, v):
+        """Euclidean inner product of tangent vectors, shape ``(...)``."""
+        self._point(point, "point")
+        return _dot(self._vector(u, "u"), self._vector(v, "v"))
+
+    def dist(self, a, b):
+        """Great-circle distance ``2 atan2(|a - b|, |a + b|)``, accurate at 0 and pi."""
+        a = self._point(a, "a")
+        b = self._point(b, "b")
+        diff, tot = b - a, b + a
+        return 2.0 * np.arctan2(np.sqrt(_dot(diff, diff)), np.sqrt(_dot(tot, tot)))
+
+    def squared_dist(self, a, b):
+        """Squared great-circle distance."""
+        return self.dist(a, b) ** 2
+
+    def midpoint(self, a, b):
+        """Geodesic midpoint ``(a + b) / |a + b|`` (paper, Section 2.3)."""
+        s = self._point(a, "a") + self._point(b, "b")
+        sn = np.sqrt(_dot(s, s))
+        self._check_cut(sn <= self.cut_locus_tol, "midpoint", "a", "b")
+        return s / sn[..., None]
+
+    def symmetry(self, center, point):
+        """Geodesic symmetry ``s_m(z) = 2 <m, z> m - z``."""
+        m = self._point(center, "center")
+        z = self._point(point, "point")
+        return 2.0 * _dot(m, z)[..., None] * m - z
+
+    def parallel_transport(self, point, end, tangent):
+        """Transport ``u`` along the geodesic ``point -> end``: ``u - 2<y,u>/|x+y|^2 (x+y)``.
+
+        Parameters
+        ----------
+        point, end : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``end``
+        """
+        x = self._point(point, "point")
+        y = self._point(end, "end")
+        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+        s = x + y
+        ss = _dot(s, s)
+        self._check_cut(ss <= self.cut_locus_tol**2, "parallel_transport", "point", "end")
+        return u - (2.0 * _dot(y, u) / ss)[..., None] * s
+
+    def curvature(self, point, u, v, w):
+        """``R(u, v) w = <v, w> u - <u, w> v`` (``K = +1``, convention in the class doc)."""
+        self._point(point, "point")
+        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
+        k = self.sectional_curvature
+        return k * (_dot(v, w)[..., None] * u - _dot(u, w)[..., None] * v)
+
+    def curvature_derivative(self, point, x, u, v, w):
+        """``(nabla_x R)(u, v) w = 0``: the sphere is a symmetric space."""
+        arrays = [self._point(point, "point")]
+        arrays += [self._vector(a, n) for a, n in ((x, "x"), (u, "u"), (v, "v"), (w, "w"))]
+        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
+
+    # ------------------------------------------------------------------ sampling
+    def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
+        """Uniform point(s) on the sphere, shape ``(n + 1,)`` or ``(n_samples, n + 1)``."""
+        size = self.point_shape if n_samples is None else (int(n_samples), *self.point_shape)
+        g = rng.standard_normal(size)
+        return g / np.linalg.norm(g, axis=-1, keepdims=True)
+
+    def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
+        """Gaussian tangent vector(s) at ``point`` with ``E|v|^2 = scale^2``."""
+        x = self._point(point, "point")
+        if not np.isfinite(scale) or scale < 0:
+            raise ManifoldError(f"{self.name}: scale must be finite and >= 0, got {scale!r}")
+        g = rng.standard_normal(x.shape) * (scale / np.sqrt(self.dim))
+        return g - _dot(x, g)[..., None] * x
