@@ -1,0 +1,101 @@
+"""Fanning scheme: first-order convergence, exactness in a flat case, conserved quantities."""
+
+import numpy as np
+import pytest
+
+from ladders.convergence import loglog_slope
+from ladders.fanning import fanning_scheme, fanning_transport
+from manifolds.errors import ConvergenceError
+from manifolds.kernels import GaussianKernel
+from manifolds.lddmm import LDDMMLandmarks
+
+
+def _setup(seed=0, n=6, sigma=1.0):
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(-1, 1, size=(n, 2))
+    mu = 0.6 * rng.standard_normal((n, 2))
+    w = 0.5 * rng.standard_normal((n, 2))
+    return GaussianKernel(sigma, backend="numpy"), c, mu, w
+
+
+def _rkhs(kernel, c, a, b):
+    return float((a * kernel.convolve(c, c, b)).sum())
+
+
+def test_first_order_convergence():
+    kernel, c, mu, w = _setup()
+    ref = fanning_scheme(kernel, c, mu, w, n_steps=1024).momenta
+    ns = [8, 16, 32, 64]
+    errors = [
+        np.linalg.norm(fanning_scheme(kernel, c, mu, w, n_steps=n).momenta - ref)
+        / np.linalg.norm(ref)
+        for n in ns
+    ]
+    assert max(errors) > 1e-6  # the geometry is curved: the scheme is not exact here
+    assert loglog_slope(ns, errors) <= -0.8
+
+
+def test_exact_for_a_single_control_point():
+    # One control point: the metric is flat (K = 1), geodesics are straight lines
+    # and parallel transport is the identity.
+    kernel = GaussianKernel(0.7, backend="numpy")
+    c, mu, w = np.array([[0.2, -0.1]]), np.array([[0.8, 0.3]]), np.array([[-0.4, 0.9]])
+    for n in (1, 3, 10):
+        res = fanning_scheme(kernel, c, mu, w, n_steps=n)
+        np.testing.assert_allclose(res.momenta, w, atol=1e-12)
+        np.testing.assert_allclose(res.control_points, c + mu, atol=1e-12)
+
+
+def test_conserves_norm_and_component_along_geodesic():
+    kernel, c, mu, w = _setup(seed=1)
+    res = fanning_scheme(kernel, c, mu, w, n_steps=20)
+    # Geodesic momenta at the end, shot with the same RK2 steps.
+    from ladders.fanning import _rk2_step
+
+    c_end, mu_end = c, mu
+    for _ in range(20):
+        c_end, mu_end = _rk2_step(kernel, c_end, mu_end, 1 / 20)
+    np.testing.assert_allclose(res.control_points, c_end, atol=1e-14)
+    w1 = res.momenta
+    np.testing.assert_allclose(_rkhs(kernel, c_end, w1, w1), _rkhs(kernel, c, w, w), rtol=1e-10)
+    np.testing.assert_allclose(
+        _rkhs(kernel, c_end, w1, mu_end), _rkhs(kernel, c, w, mu), rtol=1e-10
+    )
+
+
+def test_zero_geodesic_is_identity_to_second_order():
+    kernel, c, _, w = _setup(seed=2)
+    res = fanning_scheme(kernel, c, np.zeros_like(c), w, n_steps=10)
+    np.testing.assert_allclose(res.control_points, c, atol=0)
+    assert np.linalg.norm(res.momenta - w) / np.linalg.norm(w) < 1e-2
+
+
+def test_norm_drift_guard_and_bad_input():
+    kernel, c, mu, w = _setup(seed=3)
+    with pytest.raises(ConvergenceError, match="n_steps"):
+        fanning_scheme(kernel, c, 3 * mu, w, n_steps=2, max_norm_drift=1e-6)
+    with pytest.raises(ValueError, match="tangent"):
+        fanning_scheme(kernel, c, mu, w[:-1], n_steps=2)
+    with pytest.raises(ValueError, match="geodesic_momenta"):
+        fanning_scheme(kernel, c, np.full_like(mu, np.nan), w, n_steps=2)
+    with pytest.raises(ValueError, match="n_steps"):
+        fanning_scheme(kernel, c, mu, w, n_steps=0)
+
+
+def test_fanning_transport_on_lddmm_space_agrees_with_pole_ladder():
+    """Both transports approximate the same parallel transport on a smooth case."""
+    from ladders import pole_ladder
+
+    rng = np.random.default_rng(4)
+    space = LDDMMLandmarks(12, 2, sigma=0.8, alpha=0.0, control_points="dense", n_steps=10)
+    s = space.random_point(rng)
+    geo = 0.15 * space.random_tangent(s, rng)
+    u = 0.1 * space.random_tangent(s, rng)
+    t = space.exp(s, geo)
+    w_fan, c_end = fanning_transport(space, s, geo, u, n_steps=20)
+    v_fan = space.kernel.convolve(c_end, c_end, w_fan)
+    w_pole = pole_ladder(space, s, t, u)
+    c_t = space.control_points(t)
+    v_pole = space.kernel.convolve(c_t, c_t, w_pole)
+    rel = np.linalg.norm(v_fan - v_pole) / np.linalg.norm(v_pole)
+    assert rel < 0.1, rel
