@@ -1,6 +1,23 @@
-"""Generic algorithms on spaces with an affine connection: ladders and symmetry errors."""
+"""Generic algorithms on spaces with an affine connection, and the paper's study.
+
+Ladders and symmetry errors use only the connection API of :mod:`manifolds`
+(``exp``, ``log``, ``midpoint``, ``symmetry``), so they run unchanged on every space.
+"""
 
 from ._rungs import LadderTrajectory
+from .area_strain import area_strain, area_strain_error, cell_areas
+from .cohort import (
+    Cohort,
+    CohortError,
+    MeshFolderError,
+    Subject,
+    SubjectParameters,
+    SyntheticLVModel,
+    make_synthetic_cohort,
+)
+from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
+from .fanning import FanningResult, fanning_scheme, fanning_transport
+from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
 from .pole_ladder import pole_ladder
 from .schild_ladder import schild_ladder
 from .symmetry_errors import (
@@ -12,6 +29,7 @@ from .symmetry_errors import (
     symmetry_errors,
     transvectivity_error,
 )
+from .vtk_io import read_vtk, write_vtk
 
 __all__ = [
     "LadderTrajectory",
@@ -24,4 +42,27 @@ __all__ = [
     "midpoint_distance",
     "symmetry_errors",
     "transvectivity_error",
+    "ConvergenceCurve",
+    "ladder_convergence",
+    "loglog_slope",
+    "FanningResult",
+    "fanning_scheme",
+    "fanning_transport",
+    "area_strain",
+    "area_strain_error",
+    "cell_areas",
+    "Cohort",
+    "CohortError",
+    "MeshFolderError",
+    "Subject",
+    "SubjectParameters",
+    "SyntheticLVModel",
+    "make_synthetic_cohort",
+    "MESH_EXTENSIONS",
+    "read_cohort",
+    "read_mesh",
+    "write_cohort",
+    "write_mesh",
+    "read_vtk",
+    "write_vtk",
 ]

@@ -21,6 +21,7 @@ import trimesh
 
 __all__ = [
     "CohortError",
+    "MeshFolderError",
     "Subject",
     "Cohort",
     "SyntheticLVModel",
@@ -37,6 +38,10 @@ GRID_ASPECT = 1.7
 
 class CohortError(ValueError):
     """Inconsistent cohort: shapes, faces or vertex counts do not correspond."""
+
+
+class MeshFolderError(CohortError):
+    """A mesh file or a cohort folder cannot be read or does not correspond."""
 
 
 @dataclass
