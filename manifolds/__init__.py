@@ -13,8 +13,11 @@ from .euclidean import Euclidean
 from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
 from .residual import ResidualAugmented, ResidualTangent
+from .metric_field import MetricField
+from .poincare_half_plane import PoincareHalfPlane
 from .riemannian import RiemannianManifold
 from .spd import SPDMatrices
+from .warped_surface import WarpedSurface
 
 __all__ = [
     "Connection",
@@ -24,6 +27,9 @@ __all__ = [
     "Hyperbolic",
     "minkowski_inner",
     "SPDMatrices",
+    "MetricField",
+    "PoincareHalfPlane",
+    "WarpedSurface",
     "ResidualAugmented",
     "ResidualTangent",
     "ConvergenceError",
