@@ -14,6 +14,7 @@ import pytest
 from ladders.pole_ladder import pole_ladder
 from ladders.schild_ladder import schild_ladder
 from ladders.symmetry_errors import symmetry_errors, transvectivity_error
+from ladders.transvection_expansion import NABLA_R_COEFFICIENTS, transvection_expansion
 from manifolds.warped_surface import WarpedSurface
 
 WARPED = WarpedSurface()
@@ -43,47 +44,30 @@ def unit(space, point, direction):
 
 
 def configuration(space, template, a, b, h):
-    """T, S = Exp_T(h a), S' = Exp_S(h b) with unit a, b; the two transvections of S'."""
+    """Expansion for T, S = Exp_T(h a), S' = Exp_S(h b) with unit a, b."""
     shape = space.exp(template, h * unit(space, template, a))
     other = space.exp(shape, h * unit(space, shape, b))
-    mid = space.midpoint(template, shape)
-    ladder = space.symmetry(template, space.symmetry(mid, other))  # s_T o s_M (S')
-    opposite = space.symmetry(mid, space.symmetry(shape, other))  # s_M o s_S (S')
-    u = space.parallel_transport(shape, mid, space.log(shape, other))
-    v = space.log(mid, template)
-    u1 = space.parallel_transport(template, mid, space.log(template, ladder))
-    u2 = space.parallel_transport(template, mid, space.log(template, opposite))
-    return mid, u, v, u1, u2
-
-
-def nabla_r_terms(space, mid, u, v, sign=1.0):
-    """[(nabla_v R)(u,v)u, (nabla_v R)(u,v)v, (nabla_u R)(u,v)u, (nabla_u R)(u,v)v] / 12."""
-    dr = sign * space.riemann_derivative(mid)
-
-    def term(x, w):
-        return np.einsum("lijkm,m,i,j,k->l", dr, x, u, v, w) / 12.0
-
-    return np.stack([term(v, u), term(v, v), term(u, u), term(u, v)], axis=1)
+    return transvection_expansion(space, template, shape, other)
 
 
 def rel(predicted, measured):
     return np.linalg.norm(predicted - measured) / np.linalg.norm(measured)
 
 
-# Coefficients of the four terms of nabla_r_terms.
-POLE_PRINTED = np.array([5.0, -2.0, -2.0, 1.0])  # u' - u, paper eq. (4)
+# Coefficients of the four basis terms of TransvectionExpansion.terms.
+POLE_PRINTED = NABLA_R_COEFFICIENTS["pole_ladder"]  # u' - u, as printed in the paper
 OPPOSITE_PRINTED = -np.array([5.0, 1.0, 2.0, 1.0])  # u'' - u as printed
-OPPOSITE_MEASURED = -np.array([5.0, 2.0, 2.0, 1.0])  # u'' - u, fitted below
+OPPOSITE_MEASURED = NABLA_R_COEFFICIENTS["opposite"]  # u'' - u, fitted below
 DIFF_PRINTED = np.array([10.0, -1.0, -4.0, 0.0])  # u' - u'' as printed
 DIFF_FROM_PRINTED = POLE_PRINTED - OPPOSITE_PRINTED  # = (10, -1, 0, 2)
-DIFF_MEASURED = POLE_PRINTED - OPPOSITE_MEASURED  # = (10, 0, 0, 2)
+DIFF_MEASURED = NABLA_R_COEFFICIENTS["transvectivity"]  # = (10, 0, 0, 2)
 
 
 @pytest.fixture(scope="module")
 def leading_term():
     a, b = np.array([0.6, 0.8]), np.array([-0.28, 0.96])
-    mid, u, v, u1, u2 = configuration(WARPED, BASE, a, b, 0.05)
-    return nabla_r_terms(WARPED, mid, u, v), u1 - u, u2 - u
+    exp = configuration(WARPED, BASE, a, b, 0.05)
+    return exp.terms, exp.pole_deviation, exp.opposite_deviation
 
 
 def test_pole_ladder_second_order_in_rungs():
@@ -155,10 +139,10 @@ def test_expansion_coefficients_fitted_over_configurations():
     for _ in range(5):
         template = rng.uniform(-1.0, 1.0, 2)
         a, b = rng.standard_normal(2), rng.standard_normal(2)
-        mid, u, v, u1, u2 = configuration(WARPED, template, a, b, 0.03)
-        rows.append(nabla_r_terms(WARPED, mid, u, v))
-        d1s.append(u1 - u)
-        d2s.append(u2 - u)
+        exp = configuration(WARPED, template, a, b, 0.03)
+        rows.append(exp.terms)
+        d1s.append(exp.pole_deviation)
+        d2s.append(exp.opposite_deviation)
     basis = np.concatenate(rows)
     for target, expected in (
         (np.concatenate(d1s), POLE_PRINTED),
