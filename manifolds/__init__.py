@@ -12,9 +12,12 @@ from .errors import (
 from .euclidean import Euclidean
 from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
-from .residual import ResidualAugmented, ResidualTangent
+from .kernels import GaussianKernel
+from .lddmm import LDDMMLandmarks
 from .metric_field import MetricField
 from .poincare_half_plane import PoincareHalfPlane
+from .registration import RegistrationResult, inverse_consistency, register
+from .residual import ResidualAugmented, ResidualTangent
 from .riemannian import RiemannianManifold
 from .spd import SPDMatrices
 from .warped_surface import WarpedSurface
@@ -30,6 +33,11 @@ __all__ = [
     "MetricField",
     "PoincareHalfPlane",
     "WarpedSurface",
+    "GaussianKernel",
+    "LDDMMLandmarks",
+    "RegistrationResult",
+    "inverse_consistency",
+    "register",
     "ResidualAugmented",
     "ResidualTangent",
     "ConvergenceError",

@@ -1,6 +1,26 @@
 """Swappable numerical methods used by the spaces (ODE integration, shooting, optimisation)."""
 
 from .geodesic_ode import GeodesicDomainError, GeodesicIntegrator, GeodesicSolution
+from .integrators import RK2, RK4, Euler, Integrator, get_integrator
+from .landmark_shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
+from .optimizers import LBFGSOptions, minimize_lbfgsb
 from .shooting import ShootingSolver
 
-__all__ = ["GeodesicDomainError", "GeodesicIntegrator", "GeodesicSolution", "ShootingSolver"]
+__all__ = [
+    "GeodesicDomainError",
+    "GeodesicIntegrator",
+    "GeodesicSolution",
+    "ShootingSolver",
+    "Integrator",
+    "Euler",
+    "RK2",
+    "RK4",
+    "get_integrator",
+    "ShootingResult",
+    "flow",
+    "hamiltonian",
+    "shoot",
+    "shooting_vjp",
+    "LBFGSOptions",
+    "minimize_lbfgsb",
+]

@@ -1,0 +1,25 @@
+"""Sphinx configuration: Markdown pages (MyST) and an API reference from numpydoc docstrings."""
+
+import os
+import sys
+
+sys.path.insert(0, os.path.abspath(".."))
+
+project = "symladders"
+author = "symladders developers"
+extensions = [
+    "myst_parser",
+    "numpydoc",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+myst_enable_extensions = ["dollarmath"]
+numpydoc_show_class_members = False
+numpydoc_validation_checks = set()
+autosummary_generate = True
+autodoc_default_options = {"members": True, "inherited-members": False, "show-inheritance": True}
+exclude_patterns = ["_build"]
+html_theme = "alabaster"
+suppress_warnings = ["myst.header"]

@@ -1,0 +1,331 @@
+"""The LDDMM landmark space: shapes as point sets deformed by Gaussian-kernel flows.
+
+Paper, Section 2.1. A point is a shape ``T`` of ``k`` landmarks in ``R^d``
+(e.g. the vertices of a mesh, in correspondence across shapes). A tangent
+vector at ``T`` is a set of initial momenta ``mu`` at the control points
+``c(T)`` chosen by the control-point policy; ``Exp_T(mu) = phi_1(T)`` is the
+flow of the geodesic shot from ``(c(T), mu)`` and ``Log_T(S)`` is the
+registration of ``T`` onto ``S`` (eq. 3), which is inexact for ``alpha > 0``:
+``S = Exp_T(Log_T S) + delta`` (eq. 4).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from dataclasses import asdict
+
+import numpy as np
+
+from .connection import Connection
+from .control_points import AUTO_THRESHOLD, resolve_control_points
+from .errors import ManifoldError
+from .kernels import GaussianKernel
+from .numerics.integrators import Integrator, get_integrator
+from .numerics.landmark_shooting import shoot
+from .numerics.optimizers import LBFGSOptions
+from .registration import RegistrationResult, register
+from .validation import check_array
+
+__all__ = ["LDDMMLandmarks"]
+
+
+class LDDMMLandmarks(Connection):
+    """Landmark shapes ``(k, d)`` with the LDDMM exponential and registration as logarithm.
+
+    Parameters
+    ----------
+    n_landmarks : int
+        Number of landmarks (mesh vertices) ``k``.
+    dim : int
+        Ambient dimension ``d`` (2 or 3).
+    sigma : float
+        Width of the Gaussian kernel ``K(x, y) = exp(-|x - y|^2 / sigma^2)``.
+    alpha : float
+        Regularisation of the registration: ``C = ||S - phi_1(T)||^2 + alpha^2 ||v_0||_H^2``.
+    control_points : {"auto", "dense", "grid"} or array of shape ``(n_cp, d)``, default "auto"
+        Control-point policy (see :mod:`manifolds.control_points`).
+    integrator : {"euler", "rk2", "rk4"} or Integrator, default "euler"
+    n_steps : int, default 10
+    optimizer : LBFGSOptions or dict, optional
+        Settings of the registration's L-BFGS-B.
+    cache_size : int, default 16
+        Number of registrations kept (LRU) so that ``log``, ``log_with_residual``
+        and ``register`` on the same pair register only once.
+    backend : {"auto", "numpy", "numba"}, default "auto"
+    block_size : int, optional
+        Kernel-matrix entries per block of the numpy backend.
+    auto_threshold : int
+        Vertex count above which ``"auto"`` switches from dense to grid control points.
+    precondition : bool, default True
+        Preconditioned L-BFGS variables (see ``docs/lddmm.md``).
+    """
+
+    is_symmetric = False
+    supports_batch = False
+
+    def __init__(
+        self,
+        n_landmarks: int,
+        dim: int,
+        sigma: float,
+        alpha: float,
+        control_points="auto",
+        integrator: str | Integrator = "euler",
+        n_steps: int = 10,
+        optimizer: LBFGSOptions | dict | None = None,
+        cache_size: int = 16,
+        backend: str = "auto",
+        block_size: int | None = None,
+        auto_threshold: int = AUTO_THRESHOLD,
+        precondition: bool = True,
+    ):
+        if int(n_landmarks) != n_landmarks or n_landmarks < 1:
+            raise ManifoldError(f"LDDMMLandmarks: n_landmarks must be >= 1, got {n_landmarks}")
+        if dim not in (2, 3):
+            raise ManifoldError(f"LDDMMLandmarks: dim must be 2 or 3, got {dim}")
+        alpha = float(alpha)
+        if not np.isfinite(alpha) or alpha < 0:
+            raise ManifoldError(f"LDDMMLandmarks: alpha must be >= 0, got {alpha}")
+        if int(n_steps) != n_steps or n_steps < 1:
+            raise ManifoldError(f"LDDMMLandmarks: n_steps must be >= 1, got {n_steps}")
+        self.point_shape = (int(n_landmarks), int(dim))
+        self.kernel = GaussianKernel(sigma, backend=backend, block_size=block_size)
+        self.sigma = self.kernel.sigma
+        self.alpha = alpha
+        if isinstance(control_points, str):
+            resolve_control_points(np.zeros((1, dim)), control_points, self.sigma)
+            self.control_points_policy = control_points
+        else:
+            self.control_points_policy = check_array(control_points, (dim,), "control_points")
+            if self.control_points_policy.ndim != 2:
+                raise ManifoldError(
+                    f"LDDMMLandmarks: control_points must have shape (n_cp, {dim}), "
+                    f"got {self.control_points_policy.shape}"
+                )
+        self.integrator = get_integrator(integrator)
+        self.n_steps = int(n_steps)
+        if isinstance(optimizer, dict):
+            optimizer = LBFGSOptions(**optimizer)
+        self.optimizer = LBFGSOptions() if optimizer is None else optimizer
+        self.cache_size = int(cache_size)
+        self.auto_threshold = int(auto_threshold)
+        self.precondition = bool(precondition)
+        self._cache: OrderedDict = OrderedDict()
+        self.n_registrations = 0
+
+    def __repr__(self) -> str:
+        k, d = self.point_shape
+        policy = self.control_points_policy
+        policy = policy if isinstance(policy, str) else f"array{policy.shape}"
+        return (
+            f"LDDMMLandmarks(k={k}, d={d}, sigma={self.sigma:g}, alpha={self.alpha:g}, "
+            f"control_points={policy!r}, integrator={self.integrator.name!r}, "
+            f"n_steps={self.n_steps})"
+        )
+
+    # ------------------------------------------------------------ building blocks
+    def control_points(self, point) -> np.ndarray:
+        """Control points ``c(T)`` of the template ``point``, shape ``(n_cp, d)``."""
+        point = self.check_point(point)
+        return resolve_control_points(
+            point, self.control_points_policy, self.sigma, self.auto_threshold
+        )
+
+    def kernel_matrix(self, control_points) -> np.ndarray:
+        """``K(c, c)``, shape ``(n_cp, n_cp)``."""
+        return self.kernel.matrix(np.asarray(control_points, dtype=float))
+
+    def kernel_solve(self, control_points, rhs, nugget: float = 0.0) -> np.ndarray:
+        """Solve ``K(c, c) X = rhs`` (velocities at the control points back to momenta)."""
+        return self.kernel.solve(np.asarray(control_points, dtype=float), rhs, nugget)
+
+    def _check_momenta(self, cp: np.ndarray, momenta, name: str) -> np.ndarray:
+        arr = check_array(momenta, (cp.shape[1],), f"{self.name}: {name}")
+        if arr.shape != cp.shape:
+            raise ManifoldError(
+                f"{self.name}: {name}: expected momenta of shape {cp.shape} "
+                f"(n_cp, d) at the control points, got {arr.shape}"
+            )
+        return arr
+
+    def shoot(
+        self,
+        template,
+        momenta,
+        control_points=None,
+        return_trajectory: bool = False,
+        integrator: str | Integrator | None = None,
+    ):
+        """Deformed template ``phi_1(T)`` for the geodesic shot from ``(c, momenta)``.
+
+        Parameters
+        ----------
+        template : array, shape ``(k, d)``
+        momenta : array, shape ``(n_cp, d)``
+        control_points : array, shape ``(n_cp, d)``, optional
+            Defaults to the policy's control points of ``template``.
+        return_trajectory : bool
+            Also return the list of ``n_steps + 1`` states ``(c, mu, x)`` (for
+            dense control points the template is carried as ``c``, and the states
+            are ``(c, mu)``).
+        integrator : optional
+            Overrides the space's integrator (e.g. ``"rk2"`` for the fanning scheme).
+        """
+        template = self.check_point(template, "template")
+        if control_points is None:
+            cp = resolve_control_points(
+                template, self.control_points_policy, self.sigma, self.auto_threshold
+            )
+        else:
+            cp = check_array(control_points, (self.point_shape[1],), f"{self.name}: control_points")
+        momenta = self._check_momenta(cp, momenta, "momenta")
+        dense = cp is template
+        res = shoot(
+            self.kernel,
+            cp,
+            momenta,
+            self.integrator if integrator is None else integrator,
+            self.n_steps,
+            points=None if dense else template,
+            return_trajectory=return_trajectory,
+        )
+        deformed = res.control_points if dense else res.points
+        return (deformed, res.trajectory) if return_trajectory else deformed
+
+    def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
+        """``phi_1(points)`` for the deformation shot from the template's control points."""
+        template = self.check_point(template, "template")
+        cp = (
+            self.control_points(template)
+            if control_points is None
+            else check_array(control_points, (self.point_shape[1],), "control_points")
+        )
+        momenta = self._check_momenta(cp, momenta, "momenta")
+        pts = check_array(points, (self.point_shape[1],), f"{self.name}: points")
+        res = shoot(self.kernel, cp, momenta, self.integrator, self.n_steps, points=pts)
+        return res.points
+
+    # ------------------------------------------------------------ connection
+    def exp(self, point, tangent):
+        """``Exp_T(mu) = phi_1(T)``; ``tangent`` is the momenta at ``c(T)``, ``(n_cp, d)``."""
+        point = self.check_point(point, "point")
+        cp = self.control_points(point)
+        tangent = self._check_momenta(cp, tangent, "tangent")
+        return self.shoot(point, tangent, control_points=None)
+
+    def _key(self, template, target, initial_momenta) -> bytes:
+        h = hashlib.blake2b(digest_size=20)
+        for arr in (template, target, initial_momenta):
+            h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
+        policy = self.control_points_policy
+        params = (
+            self.point_shape,
+            self.sigma,
+            self.alpha,
+            policy if isinstance(policy, str) else policy.tobytes(),
+            self.integrator,
+            self.n_steps,
+            tuple(sorted(asdict(self.optimizer).items())),
+            self.precondition,
+            self.auto_threshold,
+        )
+        h.update(repr(params).encode())
+        return h.digest()
+
+    def register(self, template, target, initial_momenta=None) -> RegistrationResult:
+        """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters."""
+        template = self.check_point(template, "template")
+        target = self.check_point(target, "target")
+        cp = self.control_points(template)
+        if initial_momenta is not None:
+            initial_momenta = self._check_momenta(cp, initial_momenta, "initial_momenta")
+        key = self._key(template, target, initial_momenta)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        result = register(
+            template,
+            target,
+            self.kernel,
+            self.alpha,
+            control_points=cp,
+            integrator=self.integrator,
+            n_steps=self.n_steps,
+            initial_momenta=initial_momenta,
+            options=self.optimizer,
+            precondition=self.precondition,
+        )
+        self.n_registrations += 1
+        for arr in (result.momenta, result.residual, result.deformed, result.control_points):
+            arr.setflags(write=False)
+        if self.cache_size > 0:
+            self._cache[key] = result
+            while len(self._cache) > self.cache_size:
+                self._cache.popitem(last=False)
+        return result
+
+    def log(self, point, other):
+        """``Log_T(S)``: the registration momenta at ``c(T)``, shape ``(n_cp, d)``."""
+        point = self.check_point(point, "point")
+        other = self.check_point(other, "other")
+        return self.register(point, other).momenta.copy()
+
+    def log_with_residual(self, point, other):
+        """``(Log_T(S), delta)`` with ``delta = S - Exp_T(Log_T S)`` (eq. 4), one registration."""
+        point = self.check_point(point, "point")
+        other = self.check_point(other, "other")
+        res = self.register(point, other)
+        return res.momenta.copy(), res.residual.copy()
+
+    def clear_cache(self) -> None:
+        """Forget cached registrations."""
+        self._cache.clear()
+
+    # ------------------------------------------------------------ metric
+    def inner(self, point, u, v):
+        """RKHS product ``sum_ij K(c_i, c_j) u_i . v_j`` at the control points of ``point``."""
+        cp = self.control_points(point)
+        u = self._check_momenta(cp, u, "u")
+        v = self._check_momenta(cp, v, "v")
+        return self.kernel.rkhs_inner(cp, u, v)
+
+    def norm(self, point, v):
+        """RKHS norm ``||v||_H`` of momenta ``v`` at ``point``."""
+        return float(np.sqrt(max(self.inner(point, v, v), 0.0)))
+
+    # ------------------------------------------------------------ sampling
+    def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
+        """A smooth random shape: a perturbed ellipse (d = 2) or ellipsoid (d = 3).
+
+        The landmarks are spread evenly on the unit circle or sphere (Fibonacci
+        lattice), scaled to semi-axes ``(1, 0.7[, 0.5])`` perturbed by 5 %, with
+        a smooth random radial modulation of about 5 % and a small translation.
+        """
+        if n_samples is not None:
+            return np.stack([self.random_point(rng) for _ in range(int(n_samples))])
+        k, d = self.point_shape
+        if d == 2:
+            theta = 2 * np.pi * (np.arange(k) + rng.uniform()) / k
+            u = np.stack([np.cos(theta), np.sin(theta)], axis=1)
+            axes = np.array([1.0, 0.7])
+        else:
+            i = np.arange(k) + 0.5
+            z = 1 - 2 * i / k
+            phi = np.pi * (1 + 5**0.5) * i + 2 * np.pi * rng.uniform()
+            r = np.sqrt(np.maximum(1 - z**2, 0.0))
+            u = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
+            axes = np.array([1.0, 0.7, 0.5])
+        axes = axes * (1 + 0.05 * rng.standard_normal(d))
+        lin = rng.standard_normal(d)
+        quad = rng.standard_normal((d, d))
+        radial = 1 + 0.05 * (u @ lin + np.einsum("ki,ij,kj->k", u, quad + quad.T, u) / 2)
+        return u * axes * radial[:, None] + 0.05 * rng.standard_normal(d)
+
+    def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
+        """Random momenta at ``c(point)`` whose velocity at the control points has RMS ``scale``."""
+        cp = self.control_points(point)
+        z = rng.standard_normal(cp.shape)
+        vel = self.kernel.convolve(cp, cp, z)
+        rms = np.sqrt((vel * vel).sum(axis=1).mean())
+        return scale * z / rms

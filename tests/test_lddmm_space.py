@@ -1,0 +1,132 @@
+"""The LDDMM landmark space: contract with registration-level tolerances, cache, validation."""
+
+import numpy as np
+import pytest
+
+from ladders.pole_ladder import pole_ladder
+from ladders.schild_ladder import schild_ladder
+from ladders.symmetry_errors import symmetry_errors
+from manifolds.errors import ManifoldError
+from manifolds.lddmm import LDDMMLandmarks
+
+from .contract import ConnectionContract
+
+
+def small_space(**kw):
+    """Six well-separated landmarks: registration is well posed and fast."""
+    params = dict(sigma=0.6, alpha=1e-3, control_points="dense", integrator="rk2")
+    params.update(kw)
+    return LDDMMLandmarks(6, 2, **params)
+
+
+class TestLDDMMContract(ConnectionContract):
+    """The generic contract; log is a registration, exact up to ~1e-6 here."""
+
+    space = small_space()
+    rtol = 1e-4
+    atol = 1e-4
+    tangent_scale = 0.3
+    max_examples = 4
+
+
+def test_symmetry_fixes_center_exactly_and_zero_momenta():
+    space = small_space(control_points="grid")
+    rng = np.random.default_rng(0)
+    a = space.random_point(rng)
+    np.testing.assert_array_equal(space.symmetry(a, a), a)
+    zero = np.zeros_like(space.control_points(a))
+    np.testing.assert_array_equal(space.exp(a, zero), a)
+    np.testing.assert_array_equal(space.log(a, a), zero)
+
+
+def test_log_with_residual_and_register_share_one_registration():
+    space = small_space(alpha=0.3)
+    rng = np.random.default_rng(1)
+    a, b = space.random_point(rng), space.random_point(rng)
+    mom = space.log(a, b)
+    mom2, resid = space.log_with_residual(a, b)
+    res = space.register(a, b)
+    assert space.n_registrations == 1
+    np.testing.assert_array_equal(mom, mom2)
+    np.testing.assert_allclose(space.exp(a, mom) + resid, b, atol=1e-12)
+    assert res.registration_error > 1e-3  # alpha = 0.3: inexact matching, nonzero residual
+    mom[0, 0] += 1.0  # returned arrays are copies: the cache is not modified
+    np.testing.assert_array_equal(space.log(a, b), mom2)
+    assert space.n_registrations == 1
+    space.register(b, a)
+    assert space.n_registrations == 2
+
+
+def test_cache_is_bounded_lru():
+    space = small_space(cache_size=2)
+    rng = np.random.default_rng(2)
+    pts = [space.random_point(rng) for _ in range(4)]
+    for p in pts[1:]:
+        space.log(pts[0], p)
+    assert space.n_registrations == 3 and len(space._cache) == 2
+    space.log(pts[0], pts[1])  # evicted: registered again
+    assert space.n_registrations == 4
+
+
+def test_grid_tangents_inner_and_random_tangent_scale():
+    space = LDDMMLandmarks(40, 3, sigma=0.5, alpha=0.1, control_points="grid")
+    rng = np.random.default_rng(3)
+    a = space.random_point(rng)
+    cp = space.control_points(a)
+    assert cp.shape[1] == 3 and 4 <= cp.shape[0] < 40
+    u = space.random_tangent(a, rng, scale=0.2)
+    assert u.shape == cp.shape
+    vel = space.kernel.convolve(cp, cp, u)
+    np.testing.assert_allclose(np.sqrt((vel**2).sum(1).mean()), 0.2, rtol=1e-12)
+    v = space.random_tangent(a, rng)
+    k = space.kernel_matrix(cp)
+    np.testing.assert_allclose(space.inner(a, u, v), np.sum(u * (k @ v)), rtol=1e-12)
+    np.testing.assert_allclose(space.norm(a, u) ** 2, space.inner(a, u, u), rtol=1e-12)
+    np.testing.assert_allclose(space.kernel_solve(cp, k @ u), u, rtol=1e-6, atol=1e-8)
+    deformed, traj = space.shoot(a, u, return_trajectory=True, integrator="rk2")
+    assert len(traj) == space.n_steps + 1 and len(traj[0]) == 3
+    np.testing.assert_allclose(deformed, space.exp(a, u), atol=0.05 * 0.2)
+
+
+def test_validation_errors_name_the_argument():
+    space = small_space()
+    rng = np.random.default_rng(4)
+    a = space.random_point(rng)
+    with pytest.raises(ManifoldError, match="other"):
+        space.log(a, np.zeros((7, 2)))
+    with pytest.raises(ManifoldError, match="point"):
+        space.exp(np.full((6, 2), np.nan), np.zeros((6, 2)))
+    with pytest.raises(ManifoldError, match="tangent"):
+        space.exp(a, np.zeros((5, 2)))
+    with pytest.raises(ManifoldError, match="initial_momenta"):
+        space.register(a, a, initial_momenta=np.zeros((6, 3)))
+    with pytest.raises(ManifoldError, match="target"):
+        space.register(a, np.ones((6, 3)))
+    with pytest.raises(ManifoldError, match="dim"):
+        LDDMMLandmarks(6, 4, sigma=1.0, alpha=0.1)
+    with pytest.raises(ManifoldError, match="alpha"):
+        LDDMMLandmarks(6, 2, sigma=1.0, alpha=-1.0)
+    with pytest.raises(ManifoldError, match="control_points"):
+        LDDMMLandmarks(6, 2, sigma=1.0, alpha=0.1, control_points="random")
+
+
+def test_ladders_and_symmetry_errors_run_on_the_space():
+    space = small_space()
+    rng = np.random.default_rng(5)
+    s = space.random_point(rng)
+    t = space.exp(s, space.random_tangent(s, rng, 0.2))
+    u = space.random_tangent(s, rng, 0.15)
+    # Transport from a point to itself is the identity up to registration accuracy.
+    for ladder in (pole_ladder, schild_ladder):
+        np.testing.assert_allclose(ladder(space, s, s, u), u, atol=1e-4 * np.abs(u).max())
+    for ladder in (pole_ladder, schild_ladder):
+        w = ladder(space, s, t, u, n_rungs=2)
+        assert w.shape == u.shape and np.all(np.isfinite(w))
+        # Transport roughly preserves the size of the vector (up to curvature effects).
+        np.testing.assert_allclose(space.norm(t, w), space.norm(s, u), rtol=0.2)
+    s2 = space.exp(s, u)
+    errs = symmetry_errors(space, t, s, s2).as_dict()
+    size = np.linalg.norm(s - s.mean(0))
+    for name in ("midpoint_distance", "centrality", "involutivity"):
+        assert 0 <= errs[name] < 1e-3 * size, (name, errs[name])
+    assert 0 <= errs["transvectivity"] < 0.1 * size

@@ -1,0 +1,102 @@
+"""Registration (the logarithm): recovery of exact shots, the alpha trade-off, convergence."""
+
+import importlib.util
+import pathlib
+import warnings
+
+import numpy as np
+import pytest
+
+from manifolds.errors import ConvergenceWarning
+from manifolds.kernels import GaussianKernel
+from manifolds.lddmm import LDDMMLandmarks
+from manifolds.numerics.optimizers import LBFGSOptions
+from manifolds.registration import inverse_consistency, register
+
+
+def exact_pair(space, seed, scale=0.25):
+    rng = np.random.default_rng(seed)
+    template = space.random_point(rng)
+    momenta = space.random_tangent(template, rng, scale)
+    return template, space.exp(template, momenta), momenta
+
+
+@pytest.mark.parametrize("policy", ["dense", "grid"])
+def test_exact_shot_is_recovered_with_small_alpha(policy):
+    space = LDDMMLandmarks(30, 2, sigma=0.5, alpha=1e-3, control_points=policy, backend="numpy")
+    template, target, _ = exact_pair(space, seed=0)
+    res = space.register(template, target)
+    diameter = np.max(np.linalg.norm(target[:, None] - target[None], axis=-1))
+    assert res.converged
+    assert np.max(np.linalg.norm(res.deformed - target, axis=1)) <= 1e-3 * diameter
+    np.testing.assert_allclose(res.residual, target - res.deformed, atol=0)
+    np.testing.assert_allclose(
+        res.objective, res.registration_error**2 + 1e-6 * res.rkhs_norm**2, rtol=1e-10
+    )
+    np.testing.assert_allclose(res.rms_error, res.registration_error / np.sqrt(30), rtol=1e-12)
+    assert np.all(np.diff(res.history) <= 1e-12 * res.history[0])
+
+
+def test_error_grows_and_norm_falls_with_alpha():
+    rng = np.random.default_rng(1)
+    base = LDDMMLandmarks(25, 3, sigma=0.6, alpha=0.0, control_points="dense")
+    template, other = base.random_point(rng), base.random_point(rng)
+    errors, norms = [], []
+    for alpha in (0.03, 0.3, 3.0):
+        space = LDDMMLandmarks(25, 3, sigma=0.6, alpha=alpha, control_points="dense")
+        res = space.register(template, other)
+        assert res.converged
+        errors.append(res.registration_error)
+        norms.append(res.rkhs_norm)
+    assert errors[0] < errors[1] < errors[2]
+    assert norms[0] > norms[1] > norms[2]
+    # alpha -> infinity tends to the point distribution model: no deformation.
+    assert errors[2] > 0.5 * np.linalg.norm(other - template)
+
+
+def test_non_convergence_warns_and_warm_start_resumes():
+    space = LDDMMLandmarks(20, 2, sigma=0.5, alpha=0.05, control_points="dense")
+    template, target, _ = exact_pair(space, seed=2, scale=0.4)
+    kernel = space.kernel
+    with pytest.warns(ConvergenceWarning, match="did not converge"):
+        early = register(template, target, kernel, 0.05, options=LBFGSOptions(max_iter=2))
+    assert not early.converged and early.n_iter == 2
+    full = register(template, target, kernel, 0.05)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        warm = register(template, target, kernel, 0.05, initial_momenta=full.momenta)
+    assert warm.converged
+    np.testing.assert_allclose(warm.history[0], full.objective, rtol=1e-12)
+    assert warm.objective <= full.objective * (1 + 1e-12)
+
+
+def test_inverse_consistency_is_small_for_a_nearby_pair():
+    space = LDDMMLandmarks(20, 2, sigma=0.5, alpha=0.01, control_points="dense")
+    template, target, _ = exact_pair(space, seed=3, scale=0.2)
+    err = inverse_consistency(space, template, target)
+    gap = np.linalg.norm(target - template)
+    assert 0 <= err < 0.05 * gap
+    loose = LDDMMLandmarks(20, 2, sigma=0.5, alpha=1.0, control_points="dense")
+    assert inverse_consistency(loose, template, target) > err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
+def test_compiled_and_numpy_registrations_agree():
+    template, target, _ = exact_pair(
+        LDDMMLandmarks(30, 3, sigma=0.5, alpha=0.05, backend="numpy"), seed=4
+    )
+    results = [
+        register(template, target, GaussianKernel(0.5, backend=b), 0.05) for b in ("numpy", "numba")
+    ]
+    np.testing.assert_allclose(results[0].objective, results[1].objective, rtol=1e-6)
+
+
+def test_example_runs(tmp_path):
+    path = pathlib.Path(__file__).resolve().parents[1] / "examples" / "register_meshes.py"
+    spec = importlib.util.spec_from_file_location("register_meshes", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "deformation.png"
+    result = module.main(["--output", str(out), "--subdivisions", "1"])
+    assert out.exists() and out.stat().st_size > 1000
+    assert result.converged

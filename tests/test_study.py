@@ -1,0 +1,167 @@
+"""The paper's Section 3 study on a small cohort: outputs, qualitative findings, resume, CLI."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ladders.cli import main
+from ladders.cohort import make_synthetic_cohort
+from ladders.mesh_io import write_cohort
+from ladders.study import ERROR_NAMES, StudyConfig
+from ladders.study_report import summarize, write_report
+from ladders.study_runner import run_study
+
+ALPHA2 = (0.01, 1.0, 100.0)
+CONFIG = StudyConfig(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
+COHORT = make_synthetic_cohort(n_subjects=3, grid=(8, 5), seed=0)
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("study")
+    outcome = run_study(CONFIG, COHORT.atlas, COHORT.faces, COHORT.subjects, out, progress=False)
+    paths = write_report(outcome.results, out, COHORT.atlas, COHORT.faces, COHORT.subjects[0].ed)
+    return outcome, paths
+
+
+def _means(results, variant, name):
+    return {a: np.mean([r["alpha2"][str(a)][variant][name] for r in results]) for a in ALPHA2}
+
+
+def test_outputs_are_written_and_readable(study):
+    outcome, paths = study
+    for key in ("summary_csv", "summary_md", "errors_png", "ase_png", "maps_png"):
+        assert paths[key].stat().st_size > 0
+    for key in ("errors_png", "ase_png", "maps_png"):
+        assert paths[key].read_bytes()[:4] == b"\x89PNG"
+    manifest = json.loads((outcome.output / "manifest.json").read_text())
+    assert manifest["n_subjects"] == 3 and manifest["config"]["alpha2"] == list(ALPHA2)
+    files = sorted((outcome.output / "subjects").glob("*.json"))
+    assert [f.stem for f in files] == COHORT.names
+    table = paths["summary_md"].read_text()
+    assert "Centrality" in table and "Transvectivity" in table and "Inverse cons." in table
+    rows = paths["summary_csv"].read_text().splitlines()
+    assert rows[0] == "alpha2,measure,variant,mean,std,n"
+    assert len(rows) - 1 == len(summarize(outcome.results))
+
+
+def test_residuals_improve_midpoint_centrality_involutivity(study):
+    outcome, _ = study
+    for name in ("midpoint_distance", "centrality", "involutivity"):
+        with_res = _means(outcome.results, "residual", name)
+        without = _means(outcome.results, "no_residual", name)
+        for a in ALPHA2:
+            if a >= 1:
+                assert with_res[a] < without[a], (name, a, with_res[a], without[a])
+
+
+def test_registration_error_grows_and_norm_shrinks_with_alpha(study):
+    outcome, _ = study
+    for r in outcome.results:
+        errs = [r["alpha2"][str(a)]["registration_error"] for a in ALPHA2]
+        norms = [r["alpha2"][str(a)]["rkhs_norm"] for a in ALPHA2]
+        assert np.all(np.diff(errs) > 0), errs
+        assert np.all(np.diff(norms) < 0), norms
+
+
+def test_each_result_is_complete_and_finite(study):
+    outcome, _ = study
+    k = COHORT.n_vertices
+    for r in outcome.results:
+        for a in ALPHA2:
+            node = r["alpha2"][str(a)]
+            for variant in ("residual", "no_residual"):
+                for name in (*ERROR_NAMES, "ase"):
+                    assert np.isfinite(node[variant][name]) and node[variant][name] >= 0
+            assert np.isfinite(node["fanning"]["ase"])
+            assert all(len(v) == k for v in node["las"].values())
+            assert node["n_registrations"] <= 13  # shared registrations are not repeated
+
+
+def test_resume_after_partial_run_gives_identical_results(study, tmp_path):
+    outcome, _ = study
+    run_study(CONFIG, COHORT.atlas, COHORT.faces, COHORT.subjects[:1], tmp_path, progress=False)
+    resumed = run_study(
+        CONFIG, COHORT.atlas, COHORT.faces, COHORT.subjects, tmp_path, progress=False
+    )
+    assert resumed.skipped == [COHORT.names[0]]
+    assert sorted(resumed.computed) == COHORT.names[1:]
+    strip = [{k: v for k, v in r.items() if k != "seconds"} for r in resumed.results]
+    ref = [{k: v for k, v in r.items() if k != "seconds"} for r in outcome.results]
+    assert strip == ref
+    assert summarize(resumed.results) == summarize(outcome.results)
+
+
+def test_changed_parameters_are_recomputed(tmp_path):
+    cohort = COHORT.head(1)
+    cfg = StudyConfig(alpha2=(100.0,), sigma=20.0, max_iter=20, fanning_steps=3)
+    run_study(cfg, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
+    again = run_study(cfg, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
+    assert again.computed == [] and again.skipped == cohort.names
+    other = StudyConfig(alpha2=(100.0,), sigma=25.0, max_iter=20, fanning_steps=3)
+    third = run_study(other, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
+    assert third.computed == cohort.names
+
+
+def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
+    meshes = write_cohort(COHORT, tmp_path / "meshes", ext="vtk")
+    out = tmp_path / "out"
+    args = [
+        "study", "--meshes", str(meshes), "--output", str(out), "--alpha2", "1,100",
+        "--max-iter", "30", "--fanning-steps", "3", "--jobs", "1", "--no-progress",
+    ]  # fmt: skip
+    # Kill the run as soon as the first subject is stored, then resume.
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "import sys; from ladders.cli import main; sys.exit(main())", *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        cwd=Path(__file__).resolve().parents[1],
+    )
+    deadline = time.time() + 120
+    while time.time() < deadline and not list((out / "subjects").glob("*.json")):
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    finished = list((out / "subjects").glob("*.json"))
+    assert finished, "no subject finished before the kill"
+    for f in finished:
+        json.loads(f.read_text())  # complete files only
+    assert main(args) == 0
+    assert len(list((out / "subjects").glob("*.json"))) == len(COHORT)
+    assert (out / "summary.md").exists() and (out / "fig4_symmetry_errors.png").exists()
+
+
+def test_cli_rejects_mismatched_meshes(tmp_path):
+    from ladders.cohort import MeshFolderError
+    from ladders.mesh_io import write_mesh
+
+    meshes = write_cohort(COHORT.head(1), tmp_path / "meshes", ext="ply")
+    other = make_synthetic_cohort(1, grid=(6, 4), seed=1)
+    write_mesh(meshes / f"{COHORT.names[0]}_es.ply", other.subjects[0].es, other.faces)
+    with pytest.raises(MeshFolderError, match="vertices"):
+        main(["study", "--meshes", str(meshes), "--output", str(tmp_path / "o"), "--no-progress"])
+
+
+def test_dask_backend_gives_the_same_results(study, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    from joblib import parallel_config
+
+    outcome, _ = study
+    cohort = COHORT.head(2)
+    with distributed.Client(processes=False, n_workers=1, threads_per_worker=2) as client:
+        assert client.status == "running"
+        with parallel_config(backend="dask"):
+            res = run_study(
+                CONFIG, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False
+            )
+    assert sorted(res.computed) == cohort.names
+    strip = [{k: v for k, v in r.items() if k != "seconds"} for r in res.results]
+    ref = [{k: v for k, v in r.items() if k != "seconds"} for r in outcome.results[:2]]
+    assert strip == ref
