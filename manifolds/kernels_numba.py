@@ -193,8 +193,13 @@ def _cvjp_par(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - 
 
 @njit(**_FLAGS)
 def _cvjp_ser(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - compiled
-    for i in range(x.shape[1]):
-        _cvjp_row(i, 0, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m)
+    n, n_chunks = x.shape[1], buf_c.shape[0]
+    for t in range(n_chunks):
+        for i in range(t, n, n_chunks):
+            _cvjp_row(i, t, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m)
+
+
+CVJP_CHUNKS = 8
 
 
 def _soa(arr: np.ndarray) -> np.ndarray:
@@ -259,7 +264,9 @@ def convolve_vjp(x, c, mom, cot, inv_s2):
     _check_dim(x, c, mom, cot)
     d = mom.shape[1]
     par = _parallel(x.shape[0] * c.shape[0])
-    n_chunks = max(1, min(numba.get_num_threads(), x.shape[0])) if par else 1
+    # A fixed chunking (not the thread count) keeps the summation order, hence
+    # the result, identical whatever the number of threads.
+    n_chunks = max(1, min(CVJP_CHUNKS, x.shape[0]))
     g_x = np.empty((3, x.shape[0]))
     buf_c = np.zeros((n_chunks, 3, c.shape[0]))
     buf_m = np.zeros((n_chunks, 3, c.shape[0]))
