@@ -59,15 +59,18 @@ class StudyConfig:
         L-BFGS-B iterations of each registration.
     fanning_steps : int
         Steps of the fanning scheme.
+    kernel_backend : str
+        ``"auto"`` (numba when installed), ``"numpy"`` or ``"numba"``.
     """
 
-    alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 1089.0)
+    alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
     sigma: float = 20.0
     control_points: str = "grid"
     integrator: str = "euler"
     n_steps: int = 10
     max_iter: int = 100
     fanning_steps: int = 10
+    kernel_backend: str = "auto"
 
     def as_dict(self) -> dict:
         d = asdict(self)
@@ -87,6 +90,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float) -> LDDM
         integrator=config.integrator,
         n_steps=config.n_steps,
         optimizer={"max_iter": config.max_iter},
+        backend=config.kernel_backend,
     )
 
 

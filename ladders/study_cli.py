@@ -12,9 +12,9 @@ import numpy as np
 
 __all__ = ["add_study_parser", "run_study_command", "DEFAULT_ALPHA2", "FULL_ALPHA2"]
 
-DEFAULT_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 1089.0)
 FULL_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
-DEFAULT_SUBJECTS = 12
+DEFAULT_ALPHA2 = FULL_ALPHA2
+DEFAULT_SUBJECTS = 40
 FULL_SUBJECTS = 138
 
 
@@ -76,6 +76,12 @@ def add_study_parser(sub) -> None:
     p.add_argument("--n-steps", type=int, default=10, help="time steps of the shooting")
     p.add_argument("--max-iter", type=int, default=100, help="L-BFGS-B iterations per registration")
     p.add_argument("--fanning-steps", type=int, default=10, help="steps of the fanning scheme")
+    p.add_argument(
+        "--kernel-backend",
+        choices=("auto", "numpy", "numba"),
+        default="auto",
+        help="kernel sums: numba (extra 'fast') when installed, else numpy",
+    )
     p.add_argument("--jobs", "-j", type=int, default=-1, help="parallel workers (-1: all cores)")
     p.add_argument(
         "--backend",
@@ -155,6 +161,7 @@ def run_study_command(args) -> int:
         n_steps=args.n_steps,
         max_iter=args.max_iter,
         fanning_steps=args.fanning_steps,
+        kernel_backend=args.kernel_backend,
     )
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "

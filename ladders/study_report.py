@@ -167,27 +167,30 @@ def _plot_maps(result: dict, atlas, subject_ed, faces, path: Path) -> None:
     key = min(keys, key=lambda k: abs(np.log(float(k))))  # closest to alpha^2 = 1
     las = result["alpha2"][key]["las"]
     panels = [
-        ("S - S' on S", subject_ed, las["subject"]),
-        ("T - T' on T, pole ladder with residuals", atlas, las["residual"]),
-        ("T - T' on T, pole ladder without residuals", atlas, las["no_residual"]),
+        ("S - S' on S (subject)", subject_ed, las["subject"]),
+        ("T - T' on T, pole ladder, residuals", atlas, las["residual"]),
+        ("T - T' on T, pole ladder, no residuals", atlas, las["no_residual"]),
         ("T - T' on T, fanning scheme", atlas, las["fanning"]),
     ]
     values = np.concatenate([np.asarray(p[2]) for p in panels])
-    lim = float(np.percentile(np.abs(values), 98)) or 1.0
-    fig = plt.figure(figsize=(13, 4))
+    lo, hi = np.percentile(values, [2, 98])
+    fig = plt.figure(figsize=(10, 9))
+    surf = None
     for i, (title, verts, vals) in enumerate(panels):
-        ax = fig.add_subplot(1, 4, i + 1, projection="3d")
+        ax = fig.add_subplot(2, 2, i + 1, projection="3d")
         face_vals = np.asarray(vals)[np.asarray(faces)].mean(axis=1)
         surf = ax.plot_trisurf(
-            verts[:, 0], verts[:, 1], verts[:, 2], triangles=faces, cmap="coolwarm", linewidth=0
+            verts[:, 0], verts[:, 1], verts[:, 2], triangles=faces, cmap="viridis", linewidth=0
         )
         surf.set_array(face_vals)
-        surf.set_clim(-lim, lim)
-        ax.set_title(title, fontsize=8)
+        surf.set_clim(lo, hi)
+        ax.set_box_aspect(np.ptp(verts, axis=0))
+        ax.view_init(elev=15, azim=-60)
+        ax.set_title(title, fontsize=10)
         ax.set_axis_off()
-    fig.colorbar(surf, ax=fig.axes, shrink=0.6, label="local area strain")
+    fig.colorbar(surf, ax=fig.axes, shrink=0.5, label="local area strain (a - a') / a")
     fig.suptitle(f"Area strain maps, subject {result['subject']}, alpha² = {float(key):g}")
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=100)
     plt.close(fig)
 
 
