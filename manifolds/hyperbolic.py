@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .constant_curvature import ConstantCurvatureQuadric, ratio
 from .errors import ManifoldError, NotTangentError
-from .riemannian import RiemannianManifold
-from .validation import as_float_array, check_finite, check_shape
+from .validation import as_float_array, check_shape
 
 __all__ = ["Hyperbolic", "minkowski_inner"]
 
@@ -32,13 +32,7 @@ def minkowski_inner(a, b):
     return np.einsum("...i,...i->...", a, b) - 2.0 * a[..., 0] * b[..., 0]
 
 
-def _ratio(num, den):
-    """``num / den`` where ``den > 0`` and ``1`` where ``den == 0`` (a sinc-like limit)."""
-    pos = den > 0
-    return np.where(pos, num / np.where(pos, den, 1.0), 1.0)
-
-
-class Hyperbolic(RiemannianManifold):
+class Hyperbolic(ConstantCurvatureQuadric):
     """Hyperbolic space ``H^n = {x in R^{n+1} : <x, x>_L = -1, x_0 > 0}``.
 
     Points have shape ``(..., n + 1)``; tangent vectors at ``x`` satisfy
@@ -68,18 +62,8 @@ class Hyperbolic(RiemannianManifold):
         Intrinsic dimension.
     """
 
-    is_symmetric = True
-    supports_batch = True
     sectional_curvature = -1.0
-
-    def __init__(self, n: int):
-        if isinstance(n, bool) or int(n) != n or n < 1:
-            raise ValueError(f"Hyperbolic: n must be a positive integer, got {n!r}")
-        self.dim = int(n)
-        self.point_shape = (self.dim + 1,)
-
-    def __repr__(self) -> str:
-        return f"Hyperbolic({self.dim})"
+    form = staticmethod(minkowski_inner)
 
     # ------------------------------------------------------------------ checks
     def _on_sheet(self, arr, tol):
@@ -113,12 +97,6 @@ class Hyperbolic(RiemannianManifold):
             return self.check_point(arr, name)
         return arr
 
-    def _vector(self, vector, name: str) -> np.ndarray:
-        label = f"{self.name}: {name}"
-        arr = as_float_array(vector, label)
-        check_shape(arr, self.point_shape, label)
-        return check_finite(arr, label)
-
     def _tangent(self, x, v, name: str = "tangent"):
         """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|_L^2``."""
         if not np.all(self.is_tangent(x, v)):
@@ -130,53 +108,17 @@ class Hyperbolic(RiemannianManifold):
         return v, np.maximum(minkowski_inner(v, v), 0.0)
 
     # ------------------------------------------------------------------ closed forms
-    @staticmethod
-    def _exp(x, v, vv):
+    def _exp(self, x, v, vv):
         t = np.sqrt(vv)
-        return np.cosh(t)[..., None] * x + _ratio(np.sinh(t), t)[..., None] * v
+        return np.cosh(t)[..., None] * x + ratio(np.sinh(t), t)[..., None] * v
 
-    @staticmethod
-    def _log(x, y):
+    def _log(self, x, y):
         d = y - x
         xd = minkowski_inner(x, d)
         w = d + xd[..., None] * x
         wn = np.sqrt(np.maximum(minkowski_inner(w, w), 0.0))
         theta = np.log1p(wn - xd)
-        return _ratio(theta, wn)[..., None] * w
-
-    def exp(self, point, tangent):
-        """Exponential map ``cosh|v| x + sinh|v|/|v| v`` (accurate for tiny ``v``).
-
-        Parameters
-        ----------
-        point : array, shape ``(..., n + 1)``
-        tangent : array, shape ``(..., n + 1)``, tangent at ``point`` (broadcast)
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``
-        """
-        x = self._point(point, "point")
-        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
-        return self._exp(x, v, vv)
-
-    def log(self, point, other):
-        """Logarithm map, defined everywhere.
-
-        Parameters
-        ----------
-        point, other : array, shape ``(..., n + 1)``
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``, tangent at ``point``
-        """
-        return self._log(self._point(point, "point"), self._point(other, "other"))
-
-    def inner(self, point, u, v):
-        """Minkowski product of tangent vectors, shape ``(...)``."""
-        self._point(point, "point")
-        return minkowski_inner(self._vector(u, "u"), self._vector(v, "v"))
+        return ratio(theta, wn)[..., None] * w
 
     def dist(self, a, b):
         """Distance ``2 asinh(|b - a|_L / 2)``, accurate for nearby points."""
@@ -185,20 +127,10 @@ class Hyperbolic(RiemannianManifold):
         d = b - a
         return 2.0 * np.arcsinh(0.5 * np.sqrt(np.maximum(minkowski_inner(d, d), 0.0)))
 
-    def squared_dist(self, a, b):
-        """Squared geodesic distance."""
-        return self.dist(a, b) ** 2
-
     def midpoint(self, a, b):
         """Geodesic midpoint ``(a + b) / sqrt(-<a + b, a + b>_L)`` (paper, Section 2.3)."""
         s = self._point(a, "a") + self._point(b, "b")
         return s / np.sqrt(-minkowski_inner(s, s))[..., None]
-
-    def symmetry(self, center, point):
-        """Geodesic symmetry ``s_m(z) = -2 <m, z>_L m - z``."""
-        m = self._point(center, "center")
-        z = self._point(point, "point")
-        return -2.0 * minkowski_inner(m, z)[..., None] * m - z
 
     def parallel_transport(self, point, end, tangent):
         """Transport along the geodesic ``point -> end``: ``u + <y,u>_L/(1 - <x,y>_L) (x+y)``.
@@ -217,19 +149,6 @@ class Hyperbolic(RiemannianManifold):
         u, _ = self._tangent(x, self._vector(tangent, "tangent"))
         coef = minkowski_inner(y, u) / (1.0 - minkowski_inner(x, y))
         return u + coef[..., None] * (x + y)
-
-    def curvature(self, point, u, v, w):
-        """``R(u, v) w = -(<v, w>_L u - <u, w>_L v)`` (``K = -1``, see the class doc)."""
-        self._point(point, "point")
-        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
-        k = self.sectional_curvature
-        return k * (minkowski_inner(v, w)[..., None] * u - minkowski_inner(u, w)[..., None] * v)
-
-    def curvature_derivative(self, point, x, u, v, w):
-        """``(nabla_x R)(u, v) w = 0``: hyperbolic space is a symmetric space."""
-        arrays = [self._point(point, "point")]
-        arrays += [self._vector(a, n) for a, n in ((x, "x"), (u, "u"), (v, "v"), (w, "w"))]
-        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
 
     # ------------------------------------------------------------------ sampling
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):

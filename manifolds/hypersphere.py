@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .constant_curvature import ConstantCurvatureQuadric, ratio
 from .errors import CutLocusError, ManifoldError, NotTangentError
-from .riemannian import RiemannianManifold
-from .validation import as_float_array, check_finite, check_shape
+from .validation import as_float_array, check_shape
 
 __all__ = ["Hypersphere"]
 
@@ -21,13 +21,7 @@ def _dot(a, b):
     return np.einsum("...i,...i->...", a, b)
 
 
-def _ratio(num, den):
-    """``num / den`` where ``den > 0`` and ``1`` where ``den == 0`` (a sinc-like limit)."""
-    pos = den > 0
-    return np.where(pos, num / np.where(pos, den, 1.0), 1.0)
-
-
-class Hypersphere(RiemannianManifold):
+class Hypersphere(ConstantCurvatureQuadric):
     """Unit sphere ``S^n = {x in R^{n+1} : |x| = 1}`` with the round metric.
 
     Points have shape ``(..., n + 1)``; tangent vectors at ``x`` are the vectors
@@ -54,19 +48,9 @@ class Hypersphere(RiemannianManifold):
         Intrinsic dimension (``S^2`` is the usual sphere in ``R^3``).
     """
 
-    is_symmetric = True
-    supports_batch = True
     sectional_curvature = 1.0
     cut_locus_tol = 1e-8
-
-    def __init__(self, n: int):
-        if isinstance(n, bool) or int(n) != n or n < 1:
-            raise ValueError(f"Hypersphere: n must be a positive integer, got {n!r}")
-        self.dim = int(n)
-        self.point_shape = (self.dim + 1,)
-
-    def __repr__(self) -> str:
-        return f"Hypersphere({self.dim})"
+    form = staticmethod(_dot)
 
     # ------------------------------------------------------------------ checks
     def belongs(self, point, atol: float | None = None):
@@ -99,12 +83,6 @@ class Hypersphere(RiemannianManifold):
             return self.check_point(arr, name)
         return arr
 
-    def _vector(self, vector, name: str) -> np.ndarray:
-        label = f"{self.name}: {name}"
-        arr = as_float_array(vector, label)
-        check_shape(arr, self.point_shape, label)
-        return check_finite(arr, label)
-
     def _tangent(self, x, v, name: str = "tangent"):
         """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|^2``.
 
@@ -129,10 +107,9 @@ class Hypersphere(RiemannianManifold):
             )
 
     # ------------------------------------------------------------------ closed forms
-    @staticmethod
-    def _exp(x, v, vv):
+    def _exp(self, x, v, vv):
         t = np.sqrt(vv)
-        return np.cos(t)[..., None] * x + _ratio(np.sin(t), t)[..., None] * v
+        return np.cos(t)[..., None] * x + ratio(np.sin(t), t)[..., None] * v
 
     def _log(self, x, y):
         d = y - x
@@ -142,46 +119,7 @@ class Hypersphere(RiemannianManifold):
         c = 1.0 + xd
         # Near the antipode |w| ~ |x + y| and <x, y> < 0.
         self._check_cut((wn <= self.cut_locus_tol) & (c < 0.0), "log")
-        return _ratio(np.arctan2(wn, c), wn)[..., None] * w
-
-    def exp(self, point, tangent):
-        """Exponential map ``cos|v| x + sin|v|/|v| v`` (accurate for tiny ``v``).
-
-        Parameters
-        ----------
-        point : array, shape ``(..., n + 1)``
-        tangent : array, shape ``(..., n + 1)``, tangent at ``point`` (broadcast)
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``
-        """
-        x = self._point(point, "point")
-        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
-        return self._exp(x, v, vv)
-
-    def log(self, point, other):
-        """Logarithm map with ``atan2`` (full relative accuracy near 0 and near pi).
-
-        Parameters
-        ----------
-        point, other : array, shape ``(..., n + 1)``
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``, tangent at ``point`` of norm ``dist(point, other)``
-
-        Raises
-        ------
-        CutLocusError
-            If ``other`` is (numerically) antipodal to ``point``.
-        """
-        return self._log(self._point(point, "point"), self._point(other, "other"))
-
-    def inner(self, point, u, v):
-        """Euclidean inner product of tangent vectors, shape ``(...)``."""
-        self._point(point, "point")
-        return _dot(self._vector(u, "u"), self._vector(v, "v"))
+        return ratio(np.arctan2(wn, c), wn)[..., None] * w
 
     def dist(self, a, b):
         """Great-circle distance ``2 atan2(|a - b|, |a + b|)``, accurate at 0 and pi."""
@@ -190,22 +128,12 @@ class Hypersphere(RiemannianManifold):
         diff, tot = b - a, b + a
         return 2.0 * np.arctan2(np.sqrt(_dot(diff, diff)), np.sqrt(_dot(tot, tot)))
 
-    def squared_dist(self, a, b):
-        """Squared great-circle distance."""
-        return self.dist(a, b) ** 2
-
     def midpoint(self, a, b):
         """Geodesic midpoint ``(a + b) / |a + b|`` (paper, Section 2.3)."""
         s = self._point(a, "a") + self._point(b, "b")
         sn = np.sqrt(_dot(s, s))
         self._check_cut(sn <= self.cut_locus_tol, "midpoint", "a", "b")
         return s / sn[..., None]
-
-    def symmetry(self, center, point):
-        """Geodesic symmetry ``s_m(z) = 2 <m, z> m - z``."""
-        m = self._point(center, "center")
-        z = self._point(point, "point")
-        return 2.0 * _dot(m, z)[..., None] * m - z
 
     def parallel_transport(self, point, end, tangent):
         """Transport ``u`` along the geodesic ``point -> end``: ``u - 2<y,u>/|x+y|^2 (x+y)``.
@@ -226,19 +154,6 @@ class Hypersphere(RiemannianManifold):
         ss = _dot(s, s)
         self._check_cut(ss <= self.cut_locus_tol**2, "parallel_transport", "point", "end")
         return u - (2.0 * _dot(y, u) / ss)[..., None] * s
-
-    def curvature(self, point, u, v, w):
-        """``R(u, v) w = <v, w> u - <u, w> v`` (``K = +1``, convention in the class doc)."""
-        self._point(point, "point")
-        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
-        k = self.sectional_curvature
-        return k * (_dot(v, w)[..., None] * u - _dot(u, w)[..., None] * v)
-
-    def curvature_derivative(self, point, x, u, v, w):
-        """``(nabla_x R)(u, v) w = 0``: the sphere is a symmetric space."""
-        arrays = [self._point(point, "point")]
-        arrays += [self._vector(a, n) for a, n in ((x, "x"), (u, "u"), (v, "v"), (w, "w"))]
-        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
 
     # ------------------------------------------------------------------ sampling
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):

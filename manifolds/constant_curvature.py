@@ -1,0 +1,130 @@
+"""Shared structure of the quadric models of constant curvature ``K = +-1``.
+
+The sphere ``{<x, x> = 1}`` and the hyperboloid ``{<x, x>_L = -1, x_0 > 0}`` are
+level sets of a bilinear form of ``R^{n+1}`` (Euclidean or Minkowski). Written with
+that form, their symmetry, curvature tensor, input checks and public wrappers are
+the same formulas with the sign ``K``; a subclass supplies the form, membership,
+tangency and the closed-form ``_exp``/``_log``.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+
+import numpy as np
+
+from .riemannian import RiemannianManifold
+from .validation import as_float_array, check_finite, check_shape
+
+__all__ = ["ConstantCurvatureQuadric"]
+
+
+def ratio(num, den):
+    """``num / den`` where ``den > 0`` and ``1`` where ``den == 0`` (a sinc-like limit)."""
+    pos = den > 0
+    return np.where(pos, num / np.where(pos, den, 1.0), 1.0)
+
+
+class ConstantCurvatureQuadric(RiemannianManifold):
+    """Space ``{x in R^{n+1} : <x, x>_form = 1 / K}`` with the induced metric.
+
+    Subclasses set ``sectional_curvature`` (``K``) and implement ``form``,
+    ``_point`` (validated point), ``_tangent`` (validated, projected tangent and
+    its squared norm), ``_exp(x, v, vv)`` and ``_log(x, y)``.
+
+    Curvature convention: ``R(u, v) w = nabla_u nabla_v w - nabla_v nabla_u w -
+    nabla_[u,v] w``; for constant curvature ``R(u, v) w = K (<v, w> u - <u, w> v)``.
+    """
+
+    is_symmetric = True
+    supports_batch = True
+    sectional_curvature = 1.0
+
+    def __init__(self, n: int):
+        if isinstance(n, bool) or int(n) != n or n < 1:
+            raise ValueError(f"{type(self).__name__}: n must be a positive integer, got {n!r}")
+        self.dim = int(n)
+        self.point_shape = (self.dim + 1,)
+
+    def __repr__(self) -> str:
+        return f"{self.name}({self.dim})"
+
+    @staticmethod
+    @abstractmethod
+    def form(a, b):
+        """The ambient bilinear form over the last axis (broadcasting)."""
+
+    @abstractmethod
+    def _point(self, point, name: str) -> np.ndarray: ...
+
+    @abstractmethod
+    def _tangent(self, x, v, name: str = "tangent"): ...
+
+    @abstractmethod
+    def _exp(self, x, v, vv): ...
+
+    @abstractmethod
+    def _log(self, x, y): ...
+
+    def _vector(self, vector, name: str) -> np.ndarray:
+        label = f"{self.name}: {name}"
+        arr = as_float_array(vector, label)
+        check_shape(arr, self.point_shape, label)
+        return check_finite(arr, label)
+
+    def exp(self, point, tangent):
+        """Exponential map in closed form (accurate for tiny vectors).
+
+        Parameters
+        ----------
+        point : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point`` (broadcast)
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``
+        """
+        x = self._point(point, "point")
+        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
+        return self._exp(x, v, vv)
+
+    def log(self, point, other):
+        """Logarithm map in closed form, accurate for nearby points.
+
+        Parameters
+        ----------
+        point, other : array, shape ``(..., n + 1)``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``point`` of norm ``dist(point, other)``
+        """
+        return self._log(self._point(point, "point"), self._point(other, "other"))
+
+    def inner(self, point, u, v):
+        """The ambient form restricted to tangent vectors, shape ``(...)``."""
+        self._point(point, "point")
+        return self.form(self._vector(u, "u"), self._vector(v, "v"))
+
+    def squared_dist(self, a, b):
+        """Squared geodesic distance."""
+        return self.dist(a, b) ** 2
+
+    def symmetry(self, center, point):
+        """Geodesic symmetry ``s_m(z) = 2 K <m, z> m - z``."""
+        m = self._point(center, "center")
+        z = self._point(point, "point")
+        return (2.0 * self.sectional_curvature) * self.form(m, z)[..., None] * m - z
+
+    def curvature(self, point, u, v, w):
+        """``R(u, v) w = K (<v, w> u - <u, w> v)`` (convention in the class doc)."""
+        self._point(point, "point")
+        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
+        k = self.sectional_curvature
+        return k * (self.form(v, w)[..., None] * u - self.form(u, w)[..., None] * v)
+
+    def curvature_derivative(self, point, x, u, v, w):
+        """``(nabla_x R)(u, v) w = 0``: a constant-curvature space is symmetric."""
+        arrays = [self._point(point, "point")]
+        arrays += [self._vector(a, n) for a, n in ((x, "x"), (u, "u"), (v, "v"), (w, "w"))]
+        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
