@@ -48,12 +48,24 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``symladders`` console script."""
+    """Entry point of the ``symladders`` console script.
+
+    Invalid input (unreadable or non-corresponding meshes, bad values) is
+    reported on standard error with exit status 2, without a traceback.
+    """
+    from manifolds.errors import ManifoldError
+
+    from .cohort import CohortError
+
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "validate":
-        return _run_validate(args)
-    return args.run(args)
+    try:
+        if args.command == "validate":
+            return _run_validate(args)
+        return args.run(args)
+    except (CohortError, ManifoldError) as exc:
+        print(f"symladders {args.command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -138,15 +138,18 @@ def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
     assert (out / "summary.md").exists() and (out / "fig4_symmetry_errors.png").exists()
 
 
-def test_cli_rejects_mismatched_meshes(tmp_path):
-    from ladders.cohort import MeshFolderError
+def test_cli_rejects_mismatched_meshes(tmp_path, capsys):
     from ladders.mesh_io import write_mesh
 
     meshes = write_cohort(COHORT.head(1), tmp_path / "meshes", ext="ply")
     other = make_synthetic_cohort(1, grid=(6, 4), seed=1)
     write_mesh(meshes / f"{COHORT.names[0]}_es.ply", other.subjects[0].es, other.faces)
-    with pytest.raises(MeshFolderError, match="vertices"):
-        main(["study", "--meshes", str(meshes), "--output", str(tmp_path / "o"), "--no-progress"])
+    args = ["study", "--meshes", str(meshes), "--output", str(tmp_path / "o"), "--no-progress"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "vertices" in err and f"{COHORT.names[0]}_es.ply" in err
+    assert main([*args[:2], str(tmp_path / "missing"), *args[3:]]) == 2
+    assert "missing" in capsys.readouterr().err
 
 
 def test_dask_backend_gives_the_same_results(study, tmp_path):
