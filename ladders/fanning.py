@@ -133,17 +133,34 @@ def fanning_scheme(
     return FanningResult(momenta=w, control_points=c, norm_drift=drift)
 
 
-def fanning_transport(space, base, geodesic_momenta, tangent, n_steps: int = 10):
-    """Fanning transport on an :class:`~manifolds.lddmm.LDDMMLandmarks` space.
+def fanning_transport(
+    space, base, end, tangent, n_steps: int = 10, max_norm_drift: float = 0.5
+) -> FanningResult:
+    """Fanning transport of ``tangent`` from ``base`` to ``end`` on an LDDMM space.
 
-    Transports the momenta ``tangent`` at ``base`` along the geodesic shot from
-    ``base`` with ``geodesic_momenta`` (both at the control points of ``base``).
+    The same call pattern as the ladders: the geodesic is the one shot from
+    ``base`` with ``Log_base(end)`` (a registration, cached by the space), and
+    ``tangent`` is a set of momenta at the control points of ``base``.
+
+    Parameters
+    ----------
+    space : manifolds.LDDMMLandmarks
+    base, end : arrays, shape ``space.point_shape``
+    tangent : array, shape ``(n_cp, d)``
+        Momenta at ``space.control_points(base)``, e.g. ``space.log(base, other)``.
+    n_steps : int, default 10
+    max_norm_drift : float, default 0.5
+        See :func:`fanning_scheme`.
 
     Returns
     -------
-    momenta, control_points : arrays, shape ``(n_cp, d)``
-        To deform another shape with them, pass both to the space's ``shoot``.
+    FanningResult
+        ``momenta`` carried by ``control_points`` (the control points of ``base``
+        flowed to the end of the geodesic); deform a shape with them through
+        ``space.shoot(shape, result.momenta, control_points=result.control_points)``.
     """
+    geodesic = space.log(base, end)
     c0 = space.control_points(base)
-    res = fanning_scheme(space.kernel, c0, geodesic_momenta, tangent, n_steps=n_steps)
-    return res.momenta, res.control_points
+    return fanning_scheme(
+        space.kernel, c0, geodesic, tangent, n_steps=n_steps, max_norm_drift=max_norm_drift
+    )

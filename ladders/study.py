@@ -116,12 +116,8 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         out[variant] = {name: float(getattr(errs, name)) for name in ERROR_NAMES}
         out[variant]["ase"] = area_strain_error(las_subject, las[variant])
     # Fanning: transport Log_S(S') along the geodesic S -> T, then shoot the atlas.
-    geo = space.register(s, t)
-    u = space.register(s, s2)
-    momenta, control_points = fanning_transport(
-        space, s, geo.momenta, u.momenta, n_steps=config.fanning_steps
-    )
-    t_fan = space.shoot(t, momenta, control_points=control_points)
+    fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
+    t_fan = space.shoot(t, fan.momenta, control_points=fan.control_points)
     las["fanning"] = area_strain(t, t_fan, faces)
     out["fanning"] = {"ase": area_strain_error(las_subject, las["fanning"])}
     out["las"] = {key: np.asarray(v).tolist() for key, v in las.items()}

@@ -9,7 +9,9 @@ inner loops vectorise; the exponential is evaluated by a vectorisable
 polynomial (:func:`_gexp`, relative error below ``3e-14`` and exactly zero
 below ``exp(-40) ~ 4e-18``). Outer loops run in parallel over rows above a
 size threshold; sums over columns that several rows write to go through one
-buffer per thread.
+buffer per chunk of rows. Parallel loops only pay off when every call has
+milliseconds of work: below ``PARALLEL_MIN_PAIRS`` pairs the serial loop is used,
+since on a shared machine each parallel region waits for its slowest thread.
 """
 
 from __future__ import annotations
@@ -18,9 +20,16 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-__all__ = ["convolve", "hamiltonian_rhs", "convolve_vjp", "hamiltonian_vjp", "gaussian"]
+__all__ = [
+    "convolve",
+    "hamiltonian_rhs",
+    "convolve_vjp",
+    "hamiltonian_vjp",
+    "gaussian",
+    "solve_lower",
+]
 
-PARALLEL_MIN_PAIRS = 40_000
+PARALLEL_MIN_PAIRS = 2_000_000
 _FLAGS = {"fastmath": True, "cache": True, "nogil": True}
 
 
@@ -273,3 +282,54 @@ def convolve_vjp(x, c, mom, cot, inv_s2):
     fn = _cvjp_par if par else _cvjp_ser
     fn(_soa(x), _soa(c), _soa(mom), _soa(cot), float(inv_s2), g_x, buf_c, buf_m)
     return _aos(g_x, d), _aos(buf_c.sum(axis=0), d), _aos(buf_m.sum(axis=0), d)
+
+
+@njit(cache=True, nogil=True)
+def _solve_lower(chol, rhs, transpose, out):  # pragma: no cover - compiled
+    n, m = rhs.shape
+    for i in range(n):
+        for r in range(m):
+            out[i, r] = rhs[i, r]
+    if not transpose:  # L X = B, rows of L in order
+        for i in range(n):
+            for j in range(i):
+                lij = chol[i, j]
+                for r in range(m):
+                    out[i, r] -= lij * out[j, r]
+            for r in range(m):
+                out[i, r] /= chol[i, i]
+    else:  # L^T X = B, column-oriented so that rows of L are read contiguously
+        for i in range(n - 1, -1, -1):
+            for r in range(m):
+                out[i, r] /= chol[i, i]
+            for j in range(i):
+                lij = chol[i, j]
+                for r in range(m):
+                    out[j, r] -= lij * out[i, r]
+
+
+def solve_lower(chol: np.ndarray, rhs: np.ndarray, transpose: bool = False) -> np.ndarray:
+    """Solve ``L X = B`` (or ``L^T X = B``) with a lower-triangular ``L``, single-threaded.
+
+    A serial loop with a fixed summation order: unlike a threaded BLAS ``trsm``
+    it neither competes with the kernel threads nor depends on the thread count.
+
+    Parameters
+    ----------
+    chol : array, shape ``(n, n)``, C-contiguous lower triangle (upper part ignored)
+    rhs : array, shape ``(n, m)``
+    transpose : bool
+
+    Returns
+    -------
+    array, shape ``(n, m)``
+    """
+    chol = np.ascontiguousarray(chol, dtype=np.float64)
+    rhs = np.ascontiguousarray(rhs, dtype=np.float64)
+    if chol.ndim != 2 or chol.shape[0] != chol.shape[1] or rhs.shape[0] != chol.shape[0]:
+        raise ValueError(
+            f"kernels_numba.solve_lower: shapes {chol.shape} and {rhs.shape} do not match"
+        )
+    out = np.empty_like(rhs)
+    _solve_lower(chol, rhs, bool(transpose), out)
+    return out

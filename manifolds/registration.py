@@ -152,6 +152,21 @@ def _preconditioner(kernel, template, control_points, alpha, dense, rel_ridge):
     return scipy.linalg.cholesky(gram, lower=True, overwrite_a=True, check_finite=False)
 
 
+def _triangular_solver(kernel: GaussianKernel):
+    """``(L, B, transpose) -> L^{-1} B`` or ``L^{-T} B``: serial compiled loop or scipy."""
+    if kernel.backend == "numba":
+        from .kernels_numba import solve_lower
+
+        return solve_lower
+
+    def solve(chol, rhs, transpose=False):
+        return scipy.linalg.solve_triangular(
+            chol, rhs, lower=True, trans="T" if transpose else "N", check_finite=False
+        )
+
+    return solve
+
+
 def register(
     template,
     target,
@@ -200,7 +215,8 @@ def register(
     chol = None
     diag = None
     if precondition and n_cp <= PRECONDITION_MAX_CP:
-        chol = _preconditioner(kernel, template, cp, alpha, dense, rel_ridge)
+        chol = np.ascontiguousarray(_preconditioner(kernel, template, cp, alpha, dense, rel_ridge))
+        tri_solve = _triangular_solver(kernel)
     elif precondition:
         k2 = GaussianKernel(kernel.sigma / np.sqrt(2.0), backend=kernel.backend)
         diag = k2.convolve(cp, template, np.ones((template.shape[0], 1)))[:, 0] + alpha**2
@@ -209,7 +225,7 @@ def register(
     def to_mu(z):
         z = z.reshape(n_cp, dim)
         if chol is not None:
-            return scipy.linalg.solve_triangular(chol, z, lower=True, trans="T")
+            return tri_solve(chol, z, True)
         return z / diag[:, None] if diag is not None else z
 
     def to_z(mu):
@@ -219,7 +235,7 @@ def register(
 
     def grad_to_z(g):
         if chol is not None:
-            return scipy.linalg.solve_triangular(chol, g, lower=True)
+            return tri_solve(chol, g, False)
         return g / diag[:, None] if diag is not None else g
 
     if initial_momenta is not None:
