@@ -120,7 +120,9 @@ def test_compiled_backend_agrees_with_numpy(dim):
 
     sq = np.linspace(0, 39.9, 2001)
     np.testing.assert_allclose(kernels_numba.gaussian(sq), np.exp(-sq), rtol=3e-14, atol=0)
-    x, c, mom, cot = data(n=150, m=310, dim=dim, seed=dim)  # above the parallel threshold
+    x, c, mom, cot = data(
+        n=150, m=310, dim=dim, seed=dim
+    )  # serial path (the parallel one is tested in test_registration.py)
     ref = all_sums(GaussianKernel(SIGMA, backend="numpy"), x, c, mom, cot)
     fast = all_sums(GaussianKernel(SIGMA, backend="numba"), x, c, mom, cot)
     for a, b in zip(fast, ref):

@@ -100,3 +100,103 @@ def test_example_runs(tmp_path):
     result = module.main(["--output", str(out), "--subdivisions", "1"])
     assert out.exists() and out.stat().st_size > 1000
     assert result.converged
+
+
+def bent_ellipsoid(subdivisions=2):
+    """The benchmark's ellipsoid and its bent and twisted copy (162 vertices by default)."""
+    trimesh = pytest.importorskip("trimesh")
+    template = np.asarray(trimesh.creation.icosphere(subdivisions=subdivisions).vertices)
+    template = template * np.array([1.0, 0.7, 0.5])
+    x, y, z = template.T
+    angle = 0.4 * x
+    y2 = np.cos(angle) * y - np.sin(angle) * z
+    z2 = np.sin(angle) * y + np.cos(angle) * z + 0.2 * x**2
+    return template, np.stack([x, y2, z2], axis=1)
+
+
+def test_longer_lbfgs_memory_lowers_the_objective_within_a_fixed_budget():
+    template, target = bent_ellipsoid()
+    kernel = GaussianKernel(0.5, backend="numpy")
+    values = [
+        register(
+            template,
+            target,
+            kernel,
+            0.02,
+            options=LBFGSOptions(max_iter=60, max_corrections=m),
+            warn=False,
+        ).objective
+        for m in (10, 30, LBFGSOptions().max_corrections)
+    ]
+    assert values[2] < values[1] < values[0]
+
+
+@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
+def test_compiled_triangular_solve_matches_scipy():
+    import scipy.linalg
+
+    from manifolds.kernels_numba import solve_lower
+
+    rng = np.random.default_rng(5)
+    a = rng.standard_normal((40, 40))
+    chol = np.linalg.cholesky(a @ a.T + 40 * np.eye(40))
+    rhs = rng.standard_normal((40, 3))
+    for transpose, trans in ((False, "N"), (True, "T")):
+        ref = scipy.linalg.solve_triangular(chol, rhs, lower=True, trans=trans)
+        np.testing.assert_allclose(solve_lower(chol, rhs, transpose), ref, rtol=1e-12, atol=0)
+    with pytest.raises(ValueError, match="shapes"):
+        solve_lower(chol, rhs[:5])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
+def test_parallel_kernel_path_matches_numpy_and_registration_is_thread_independent(
+    monkeypatch,
+):
+    import numba
+
+    from manifolds import kernels_numba
+
+    rng = np.random.default_rng(6)
+    x, c = rng.standard_normal((70, 3)), rng.standard_normal((50, 3))
+    mom, cot = rng.standard_normal((50, 3)), rng.standard_normal((70, 3))
+    ref, fast = GaussianKernel(0.8, backend="numpy"), GaussianKernel(0.8, backend="numba")
+    monkeypatch.setattr(kernels_numba, "PARALLEL_MIN_PAIRS", 1)
+    pairs = [
+        (fast.convolve(x, c, mom), ref.convolve(x, c, mom)),
+        *zip(fast.hamiltonian_rhs(c, mom), ref.hamiltonian_rhs(c, mom)),
+        *zip(fast.convolve_vjp(x, c, mom, cot), ref.convolve_vjp(x, c, mom, cot)),
+        *zip(
+            fast.hamiltonian_vjp(c, mom, cot[:50], x[:50]),
+            ref.hamiltonian_vjp(c, mom, cot[:50], x[:50]),
+        ),
+    ]
+    for a, b in pairs:
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11 * np.abs(b).max())
+    template, target = bent_ellipsoid(subdivisions=1)
+    outcomes = []
+    previous = numba.get_num_threads()
+    try:
+        for n_threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(n_threads)
+            res = register(
+                template, target, fast, 0.02, options=LBFGSOptions(max_iter=20), warn=False
+            )
+            outcomes.append(res.momenta)
+    finally:
+        numba.set_num_threads(previous)
+    for momenta in outcomes[1:]:
+        np.testing.assert_array_equal(momenta, outcomes[0])
+
+
+def test_blas_thread_limit_is_applied_and_restored():
+    from manifolds.numerics.optimizers import _openblas_controls, limit_blas_threads
+
+    controls = _openblas_controls()
+    if not controls:
+        pytest.skip("no OpenBLAS library loaded")
+    before = [get() for get, _ in controls]
+    with limit_blas_threads(1):
+        assert all(get() == 1 for get, _ in controls)
+    assert [get() for get, _ in controls] == before
+    with limit_blas_threads(None):
+        assert [get() for get, _ in controls] == before

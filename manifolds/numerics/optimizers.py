@@ -1,14 +1,72 @@
-"""L-BFGS-B minimisation with an objective history and an explicit convergence flag."""
+"""L-BFGS-B minimisation with an objective history and an explicit convergence flag.
+
+During the iterations the OpenBLAS libraries loaded by numpy and scipy are
+limited to ``LBFGSOptions.blas_threads`` threads (one by default). Each
+L-BFGS-B step and each preconditioner application is a small BLAS call; with
+a threaded BLAS every one of them wakes worker threads that then compete with
+the objective's own (compiled, parallel) kernels, which on a machine with few
+cores costs far more than the call itself, and makes the iterates depend on
+the thread count. The previous setting is restored on exit.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.optimize
 
-__all__ = ["LBFGSOptions", "OptimizationResult", "minimize_lbfgsb"]
+__all__ = ["LBFGSOptions", "OptimizationResult", "minimize_lbfgsb", "limit_blas_threads"]
+
+_BLAS_SYMBOLS = ("scipy_openblas", "openblas")
+_BLAS_SUFFIXES = ("64_", "")
+
+
+def _openblas_controls() -> list:
+    """``(get, set)`` thread-count functions of every OpenBLAS mapped in the process."""
+    try:
+        with open("/proc/self/maps") as fh:
+            paths = sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower()})
+    except OSError:  # not Linux: nothing to limit
+        return []
+    controls = []
+    for path in paths:
+        try:
+            lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0))
+        except OSError:
+            continue
+        for prefix in _BLAS_SYMBOLS:
+            for suffix in _BLAS_SUFFIXES:
+                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
+                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
+                if get is not None and put is not None:
+                    controls.append((get, put))
+                    break
+            else:
+                continue
+            break
+    return controls
+
+
+@contextlib.contextmanager
+def limit_blas_threads(n_threads: int | None = 1):
+    """Context limiting the OpenBLAS thread pools of the process to ``n_threads``.
+
+    ``None`` leaves them unchanged; so does a process without OpenBLAS.
+    """
+    controls = [] if n_threads is None else _openblas_controls()
+    previous = [get() for get, _ in controls]
+    try:
+        for _, put in controls:
+            put(int(n_threads))
+        yield
+    finally:
+        for (_, put), n in zip(controls, previous):
+            put(n)
 
 
 @dataclass(frozen=True)
@@ -26,15 +84,22 @@ class LBFGSOptions:
         Stop when the largest gradient component falls below ``gtol``.
     max_corrections : int
         Number of stored correction pairs (memory of the Hessian approximation).
+        A long memory costs little next to a registration objective and helps on
+        the ill-conditioned, curved LDDMM objective (100 instead of 30 lowers the
+        objective after 100 iterations of the 642-vertex benchmark by 0.8 %).
     max_line_search : int
         Maximum number of function evaluations per line search.
+    blas_threads : int or None
+        OpenBLAS threads during the iterations (see the module docstring);
+        None keeps the process setting.
     """
 
     max_iter: int = 500
     ftol: float = 1e-11
     gtol: float = 1e-9
-    max_corrections: int = 30
+    max_corrections: int = 100
     max_line_search: int = 30
+    blas_threads: int | None = 1
 
 
 @dataclass
@@ -76,27 +141,28 @@ def minimize_lbfgsb(
             cache.update(key=key, f=float(f), g=np.asarray(g, dtype=float).ravel())
         return cache["f"], cache["g"].copy()
 
-    f0, _ = wrapped(x0.copy())
-    history = [f0]
+    history: list = []
 
     def callback(intermediate_result):
         history.append(float(intermediate_result.fun))
 
-    res = scipy.optimize.minimize(
-        wrapped,
-        x0,
-        jac=True,
-        method="L-BFGS-B",
-        callback=callback,
-        options={
-            "maxiter": int(opts.max_iter),
-            "ftol": float(opts.ftol),
-            "gtol": float(opts.gtol),
-            "maxcor": int(opts.max_corrections),
-            "maxls": int(opts.max_line_search),
-        },
-    )
-    f, g = wrapped(res.x)
+    with limit_blas_threads(opts.blas_threads):
+        history.append(wrapped(x0.copy())[0])
+        res = scipy.optimize.minimize(
+            wrapped,
+            x0,
+            jac=True,
+            method="L-BFGS-B",
+            callback=callback,
+            options={
+                "maxiter": int(opts.max_iter),
+                "ftol": float(opts.ftol),
+                "gtol": float(opts.gtol),
+                "maxcor": int(opts.max_corrections),
+                "maxls": int(opts.max_line_search),
+            },
+        )
+        f, g = wrapped(res.x)
     message = str(res.message)
     converged = bool(res.success)
     if not converged and "ABNORMAL" in message.upper():
