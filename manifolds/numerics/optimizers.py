@@ -1,6 +1,6 @@
 """L-BFGS-B minimisation with an objective history and an explicit convergence flag.
 
-During the iterations the OpenBLAS libraries loaded by numpy and scipy are
+During the iterations the BLAS libraries loaded by numpy and scipy are
 limited to ``LBFGSOptions.blas_threads`` threads (one by default). Each
 L-BFGS-B step and each preconditioner application is a small BLAS call; with
 a threaded BLAS every one of them wakes worker threads that then compete with
@@ -12,61 +12,34 @@ the thread count. The previous setting is restored on exit.
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.optimize
+import threadpoolctl
 
 __all__ = ["LBFGSOptions", "OptimizationResult", "minimize_lbfgsb", "limit_blas_threads"]
-
-_BLAS_SYMBOLS = ("scipy_openblas", "openblas")
-_BLAS_SUFFIXES = ("64_", "")
-
-
-def _openblas_controls() -> list:
-    """``(get, set)`` thread-count functions of every OpenBLAS mapped in the process."""
-    try:
-        with open("/proc/self/maps") as fh:
-            paths = sorted({ln.split()[-1] for ln in fh if "openblas" in ln.lower()})
-    except OSError:  # not Linux: nothing to limit
-        return []
-    controls = []
-    for path in paths:
-        try:
-            lib = ctypes.CDLL(path, mode=getattr(os, "RTLD_NOLOAD", 0))
-        except OSError:
-            continue
-        for prefix in _BLAS_SYMBOLS:
-            for suffix in _BLAS_SUFFIXES:
-                get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
-                put = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
-                if get is not None and put is not None:
-                    controls.append((get, put))
-                    break
-            else:
-                continue
-            break
-    return controls
 
 
 @contextlib.contextmanager
 def limit_blas_threads(n_threads: int | None = 1):
-    """Context limiting the OpenBLAS thread pools of the process to ``n_threads``.
+    """Context limiting the BLAS thread pools of the process to ``n_threads``.
 
-    ``None`` leaves them unchanged; so does a process without OpenBLAS.
+    Uses ``threadpoolctl``; ``None`` leaves the pools unchanged. The previous
+    settings are restored on exit.
     """
-    controls = [] if n_threads is None else _openblas_controls()
-    previous = [get() for get, _ in controls]
-    try:
-        for _, put in controls:
-            put(int(n_threads))
+    if n_threads is None:
         yield
-    finally:
-        for (_, put), n in zip(controls, previous):
-            put(n)
+        return
+    global _CONTROLLER
+    if _CONTROLLER is None:  # scanning the loaded libraries costs ~2 ms: do it once
+        _CONTROLLER = threadpoolctl.ThreadpoolController()
+    with _CONTROLLER.limit(limits=int(n_threads), user_api="blas"):
+        yield
+
+
+_CONTROLLER = None
 
 
 @dataclass(frozen=True)
