@@ -63,7 +63,7 @@ class LBFGSOptions:
     max_line_search : int
         Maximum number of function evaluations per line search.
     blas_threads : int or None
-        OpenBLAS threads during the iterations (see the module docstring);
+        BLAS threads during the iterations (see the module docstring);
         None keeps the process setting.
     """
 
