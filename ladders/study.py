@@ -110,8 +110,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
     for variant in VARIANTS:
         sp = ResidualAugmented(space, use_residuals=variant == "residual")
         errs = symmetry_errors(sp, t, s, s2, distance=dist)
-        m = sp.midpoint(t, s)
-        t_prime = sp.transvection(t, m)(s2)  # pole ladder, Algorithm 1
+        t_prime = errs.points["pole_ladder"]  # T' = s_T(s_M(S')), Algorithm 1
         las[variant] = area_strain(t, t_prime, faces)
         out[variant] = {name: float(getattr(errs, name)) for name in ERROR_NAMES}
         out[variant]["ase"] = area_strain_error(las_subject, las[variant])

@@ -17,7 +17,7 @@ landmark shapes is the L2 distance between corresponding nodes.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -86,15 +86,22 @@ def transvectivity_error(space, template, shape, other, distance: Distance | Non
 
 @dataclass
 class SymmetryErrors:
-    """The four errors of the paper's Section 3 for one triple ``(T, S, S')``."""
+    """The four errors of the paper's Section 3 for one triple ``(T, S, S')``.
+
+    ``points`` holds the intermediate shapes: ``midpoint`` (``M``, shot from
+    ``T``), ``reflected`` (``s_M(S')``) and ``pole_ladder`` (``T' = s_T(s_M(S'))``,
+    the one-rung pole ladder of Algorithm 1).
+    """
 
     midpoint_distance: np.ndarray
     centrality: np.ndarray
     involutivity: np.ndarray
     transvectivity: np.ndarray
+    points: dict = field(default_factory=dict, repr=False, compare=False)
 
     def as_dict(self) -> dict:
-        return {k: np.asarray(v).tolist() for k, v in asdict(self).items()}
+        """The four errors as plain floats or lists (JSON-ready)."""
+        return {k: np.asarray(v).tolist() for k, v in asdict(self).items() if k != "points"}
 
 
 def symmetry_errors(
@@ -121,12 +128,11 @@ def symmetry_errors(
     m = space.midpoint(template, shape)
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)
+    ladder = space.symmetry(template, s_m_other)
     return SymmetryErrors(
         midpoint_distance=d(m, m_from_shape),
         centrality=d(space.symmetry(m, template), shape),
         involutivity=d(space.symmetry(m, s_m_other), other),
-        transvectivity=d(
-            space.symmetry(template, s_m_other),
-            space.symmetry(m, space.symmetry(shape, other)),
-        ),
+        transvectivity=d(ladder, space.symmetry(m, space.symmetry(shape, other))),
+        points={"midpoint": m, "reflected": s_m_other, "pole_ladder": ladder},
     )

@@ -135,3 +135,23 @@ def test_one_rung_pole_ladder_with_trajectory():
     np.testing.assert_allclose(
         traj.end_point, space.symmetry(end, space.symmetry(traj.pivots[0], tip)), atol=1e-14
     )
+
+
+def test_symmetry_errors_points_are_the_pole_ladder_of_algorithm_1():
+    space = Hypersphere(2)
+    rng = np.random.default_rng(7)
+    s = space.random_point(rng)
+    t = space.exp(s, space.random_tangent(s, rng, scale=0.9))
+    u = space.random_tangent(s, rng, scale=0.4)
+    s2 = space.exp(s, u)
+    errs = symmetry_errors(space, t, s, s2)
+    _, traj = pole_ladder(space, s, t, u, return_trajectory=True)
+    np.testing.assert_allclose(errs.points["pole_ladder"], traj.end_point, atol=1e-14)
+    np.testing.assert_allclose(errs.points["midpoint"], traj.pivots[0], atol=1e-15)
+    np.testing.assert_allclose(errs.points["reflected"], traj.reflected[0], atol=1e-14)
+    assert set(errs.as_dict()) == {
+        "midpoint_distance",
+        "centrality",
+        "involutivity",
+        "transvectivity",
+    }
