@@ -21,26 +21,17 @@ import sys
 import time
 import warnings
 
-import numpy as np
-
 TARGET_MB = 1024.0
 
 
 def run_case(policy: str, backend: str, iterations: int) -> dict:
-    import trimesh
-
+    from ladders.benchmark_shapes import bent_ellipsoid
     from manifolds import LDDMMLandmarks
     from manifolds.kernels import numba_available
 
     if backend == "numba" and not numba_available():
         return {"skipped": "numba not installed"}
-    template = np.asarray(trimesh.creation.icosphere(subdivisions=5).vertices)
-    template = template * np.array([1.0, 0.7, 0.5])
-    x, y, z = template.T
-    a = 0.4 * x
-    target = np.stack(
-        [x, np.cos(a) * y - np.sin(a) * z, np.sin(a) * y + np.cos(a) * z + 0.2 * x**2], axis=1
-    )
+    template, target, _ = bent_ellipsoid(subdivisions=5)
     space = LDDMMLandmarks(
         len(template), 3, sigma=0.5, alpha=0.02, control_points=policy,
         optimizer={"max_iter": iterations}, backend=backend,

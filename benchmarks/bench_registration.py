@@ -31,15 +31,10 @@ CASES = {
 
 
 def problem(subdivisions: int):
-    import trimesh
+    from ladders.benchmark_shapes import bent_ellipsoid
 
-    template = np.asarray(trimesh.creation.icosphere(subdivisions=subdivisions).vertices)
-    template = template * np.array([1.0, 0.7, 0.5])
-    x, y, z = template.T
-    angle = 0.4 * x
-    y2 = np.cos(angle) * y - np.sin(angle) * z
-    z2 = np.sin(angle) * y + np.cos(angle) * z + 0.2 * x**2
-    return template, np.stack([x, y2, z2], axis=1)
+    template, target, _ = bent_ellipsoid(subdivisions)
+    return template, target
 
 
 def run_case(name: str, backend: str, max_extra: int, repeats: int) -> dict:

@@ -13,20 +13,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import trimesh  # noqa: E402
 
+from ladders.benchmark_shapes import bent_ellipsoid  # noqa: E402
 from manifolds.lddmm import LDDMMLandmarks  # noqa: E402
-
-
-def ellipsoid_pair(subdivisions: int = 2, twist: float = 0.4, bend: float = 0.2):
-    """Icosphere scaled to semi-axes (1, 0.7, 0.5) and a copy bent and twisted along x."""
-    mesh = trimesh.creation.icosphere(subdivisions=subdivisions)
-    template = np.asarray(mesh.vertices) * np.array([1.0, 0.7, 0.5])
-    x, y, z = template.T
-    angle = twist * x
-    y2 = np.cos(angle) * y - np.sin(angle) * z
-    z2 = np.sin(angle) * y + np.cos(angle) * z + bend * x**2
-    return template, np.stack([x, y2, z2], axis=1), np.asarray(mesh.faces)
 
 
 def main(argv=None):
@@ -37,7 +26,7 @@ def main(argv=None):
     parser.add_argument("--alpha", type=float, default=0.02)
     args = parser.parse_args(argv)
 
-    template, target, faces = ellipsoid_pair(args.subdivisions)
+    template, target, faces = bent_ellipsoid(args.subdivisions)
     space = LDDMMLandmarks(
         len(template), 3, sigma=args.sigma, alpha=args.alpha, control_points="dense"
     )

@@ -6,6 +6,7 @@ Ladders and symmetry errors use only the connection API of :mod:`manifolds`
 
 from ._rungs import LadderTrajectory
 from .area_strain import area_strain, area_strain_error, cell_areas
+from .benchmark_shapes import bent_ellipsoid
 from .cohort import (
     Cohort,
     CohortError,
@@ -51,6 +52,7 @@ __all__ = [
     "area_strain",
     "area_strain_error",
     "cell_areas",
+    "bent_ellipsoid",
     "Cohort",
     "CohortError",
     "MeshFolderError",

@@ -104,14 +104,10 @@ def test_example_runs(tmp_path):
 
 def bent_ellipsoid(subdivisions=2):
     """The benchmark's ellipsoid and its bent and twisted copy (162 vertices by default)."""
-    trimesh = pytest.importorskip("trimesh")
-    template = np.asarray(trimesh.creation.icosphere(subdivisions=subdivisions).vertices)
-    template = template * np.array([1.0, 0.7, 0.5])
-    x, y, z = template.T
-    angle = 0.4 * x
-    y2 = np.cos(angle) * y - np.sin(angle) * z
-    z2 = np.sin(angle) * y + np.cos(angle) * z + 0.2 * x**2
-    return template, np.stack([x, y2, z2], axis=1)
+    from ladders.benchmark_shapes import bent_ellipsoid as shapes
+
+    template, target, _ = shapes(subdivisions)
+    return template, target
 
 
 def test_longer_lbfgs_memory_lowers_the_objective_within_a_fixed_budget():
