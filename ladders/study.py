@@ -100,8 +100,8 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
     dist = l2_distance(space)
     reg = space.register(t, s)
     out = {
-        "registration_error": float(np.linalg.norm(reg.residual)),
-        "registration_rms": float(np.sqrt(np.mean(np.sum(reg.residual**2, axis=-1)))),
+        "registration_error": float(reg.registration_error),
+        "registration_rms": float(reg.rms_error),
         "rkhs_norm": float(reg.rkhs_norm),
         "converged": bool(reg.converged),
         "inverse_consistency": float(inverse_consistency(space, t, s)),
