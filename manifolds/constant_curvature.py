@@ -30,7 +30,7 @@ class ConstantCurvatureQuadric(RiemannianManifold):
 
     Subclasses set ``sectional_curvature`` (``K``) and implement ``form``,
     ``_point`` (validated point), ``_tangent`` (validated, projected tangent and
-    its squared norm), ``_exp(x, v, vv)`` and ``_log(x, y)``.
+    its squared norm), ``_exp(x, v, vv)``, ``_log(x, y)`` and ``_transport(x, y, u)``.
 
     Curvature convention: ``R(u, v) w = nabla_u nabla_v w - nabla_v nabla_u w -
     nabla_[u,v] w``; for constant curvature ``R(u, v) w = K (<v, w> u - <u, w> v)``.
@@ -65,6 +65,10 @@ class ConstantCurvatureQuadric(RiemannianManifold):
 
     @abstractmethod
     def _log(self, x, y): ...
+
+    @abstractmethod
+    def _transport(self, x, y, u):
+        """Closed-form transport of the tangent ``u`` from ``x`` to ``y`` (validated inputs)."""
 
     def _vector(self, vector, name: str) -> np.ndarray:
         label = f"{self.name}: {name}"
@@ -105,6 +109,23 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         """The ambient form restricted to tangent vectors, shape ``(...)``."""
         self._point(point, "point")
         return self.form(self._vector(u, "u"), self._vector(v, "v"))
+
+    def parallel_transport(self, point, end, tangent):
+        """Exact transport of ``tangent`` along the geodesic ``point -> end`` (closed form).
+
+        Parameters
+        ----------
+        point, end : array, shape ``(..., n + 1)``
+        tangent : array, shape ``(..., n + 1)``, tangent at ``point``
+
+        Returns
+        -------
+        array, shape ``(..., n + 1)``, tangent at ``end``
+        """
+        x = self._point(point, "point")
+        y = self._point(end, "end")
+        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+        return self._transport(x, y, u)
 
     def squared_dist(self, a, b):
         """Squared geodesic distance."""

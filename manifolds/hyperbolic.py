@@ -132,21 +132,8 @@ class Hyperbolic(ConstantCurvatureQuadric):
         s = self._point(a, "a") + self._point(b, "b")
         return s / np.sqrt(-minkowski_inner(s, s))[..., None]
 
-    def parallel_transport(self, point, end, tangent):
-        """Transport along the geodesic ``point -> end``: ``u + <y,u>_L/(1 - <x,y>_L) (x+y)``.
-
-        Parameters
-        ----------
-        point, end : array, shape ``(..., n + 1)``
-        tangent : array, shape ``(..., n + 1)``, tangent at ``point``
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``, tangent at ``end``
-        """
-        x = self._point(point, "point")
-        y = self._point(end, "end")
-        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+    def _transport(self, x, y, u):
+        """``u + <y, u>_L / (1 - <x, y>_L) (x + y)``."""
         coef = minkowski_inner(y, u) / (1.0 - minkowski_inner(x, y))
         return u + coef[..., None] * (x + y)
 

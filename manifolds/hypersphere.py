@@ -135,21 +135,8 @@ class Hypersphere(ConstantCurvatureQuadric):
         self._check_cut(sn <= self.cut_locus_tol, "midpoint", "a", "b")
         return s / sn[..., None]
 
-    def parallel_transport(self, point, end, tangent):
-        """Transport ``u`` along the geodesic ``point -> end``: ``u - 2<y,u>/|x+y|^2 (x+y)``.
-
-        Parameters
-        ----------
-        point, end : array, shape ``(..., n + 1)``
-        tangent : array, shape ``(..., n + 1)``, tangent at ``point``
-
-        Returns
-        -------
-        array, shape ``(..., n + 1)``, tangent at ``end``
-        """
-        x = self._point(point, "point")
-        y = self._point(end, "end")
-        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+    def _transport(self, x, y, u):
+        """``u - 2 <y, u> / |x + y|^2 (x + y)``, undefined at antipodal points."""
         s = x + y
         ss = _dot(s, s)
         self._check_cut(ss <= self.cut_locus_tol**2, "parallel_transport", "point", "end")
