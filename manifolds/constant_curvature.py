@@ -29,7 +29,8 @@ class ConstantCurvatureQuadric(RiemannianManifold):
     """Space ``{x in R^{n+1} : <x, x>_form = 1 / K}`` with the induced metric.
 
     Subclasses set ``sectional_curvature`` (``K``) and implement ``form``,
-    ``_point`` (validated point), ``_tangent`` (validated, projected tangent and
+    ``_on_manifold`` and ``_tangent_ok`` (membership and tangency tests),
+    ``_tangent`` (validated, projected tangent and
     its squared norm), ``_exp(x, v, vv)``, ``_log(x, y)`` and ``_transport(x, y, u)``.
 
     Curvature convention: ``R(u, v) w = nabla_u nabla_v w - nabla_v nabla_u w -
@@ -55,7 +56,12 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         """The ambient bilinear form over the last axis (broadcasting)."""
 
     @abstractmethod
-    def _point(self, point, name: str) -> np.ndarray: ...
+    def _on_manifold(self, arr, tol):
+        """Per batch entry: does ``arr`` (right shape) lie on the quadric within ``tol``?"""
+
+    @abstractmethod
+    def _tangent_ok(self, x, v, tol):
+        """Per batch entry: is ``v`` tangent at ``x`` within ``tol``?"""
 
     @abstractmethod
     def _tangent(self, x, v, name: str = "tangent"): ...
@@ -69,6 +75,31 @@ class ConstantCurvatureQuadric(RiemannianManifold):
     @abstractmethod
     def _transport(self, x, y, u):
         """Closed-form transport of the tangent ``u`` from ``x`` to ``y`` (validated inputs)."""
+
+    def belongs(self, point, atol: float | None = None):
+        """Whether ``point`` lies on the quadric within ``atol`` (default ``self.atol``)."""
+        arr = np.asarray(point, dtype=float)
+        if arr.ndim < 1 or arr.shape[-1:] != self.point_shape:
+            return False
+        return self._on_manifold(arr, self.atol if atol is None else atol)
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``vector`` is tangent at ``point`` within ``atol`` (default ``self.atol``)."""
+        v = np.asarray(vector, dtype=float)
+        if v.ndim < 1 or v.shape[-1:] != self.point_shape:
+            return False
+        return self._tangent_ok(
+            np.asarray(point, dtype=float), v, self.atol if atol is None else atol
+        )
+
+    def _point(self, point, name: str) -> np.ndarray:
+        """Validated point: one fused membership test, the full diagnosis only on failure."""
+        label = f"{self.name}: {name}"
+        arr = as_float_array(point, label)
+        check_shape(arr, self.point_shape, label)
+        if not self._on_manifold(arr, self.atol).all():
+            return self.check_point(arr, name)
+        return arr
 
     def _vector(self, vector, name: str) -> np.ndarray:
         label = f"{self.name}: {name}"

@@ -11,7 +11,6 @@ import numpy as np
 
 from .constant_curvature import ConstantCurvatureQuadric, ratio
 from .errors import ManifoldError, NotTangentError
-from .validation import as_float_array, check_shape
 
 __all__ = ["Hyperbolic", "minkowski_inner"]
 
@@ -66,40 +65,19 @@ class Hyperbolic(ConstantCurvatureQuadric):
     form = staticmethod(minkowski_inner)
 
     # ------------------------------------------------------------------ checks
-    def _on_sheet(self, arr, tol):
+    def _on_manifold(self, arr, tol):
+        """``|<x, x>_L + 1| <= tol x_0^2`` and ``x_0 > 0`` (a NaN entry fails it)."""
         x0 = arr[..., 0]
         return (np.abs(minkowski_inner(arr, arr) + 1.0) <= tol * (x0 * x0)) & (x0 > 0)
 
-    def belongs(self, point, atol: float | None = None):
-        """Whether ``|<x, x>_L + 1| <= atol x_0^2`` and ``x_0 > 0``, per batch entry."""
-        tol = self.atol if atol is None else atol
-        arr = np.asarray(point, dtype=float)
-        if arr.ndim < 1 or arr.shape[-1:] != self.point_shape:
-            return False
-        return self._on_sheet(arr, tol)
-
-    def is_tangent(self, point, vector, atol: float | None = None):
-        """Whether ``|<x, v>_L| <= atol (1 + |x| |v|)`` (Euclidean norms)."""
-        tol = self.atol if atol is None else atol
-        x = np.asarray(point, dtype=float)
-        v = np.asarray(vector, dtype=float)
-        if v.ndim < 1 or v.shape[-1:] != self.point_shape:
-            return False
+    def _tangent_ok(self, x, v, tol):
+        """``|<x, v>_L| <= tol (1 + |x| |v|)`` (Euclidean norms)."""
         scale = 1.0 + np.sqrt(np.einsum("...i,...i->...", x, x) * np.einsum("...i,...i->...", v, v))
         return np.abs(minkowski_inner(x, v)) <= tol * scale
 
-    def _point(self, point, name: str) -> np.ndarray:
-        """Validated point: one fused test (NaN fails it), full diagnosis on failure."""
-        label = f"{self.name}: {name}"
-        arr = as_float_array(point, label)
-        check_shape(arr, self.point_shape, label)
-        if not self._on_sheet(arr, self.atol).all():
-            return self.check_point(arr, name)
-        return arr
-
     def _tangent(self, x, v, name: str = "tangent"):
         """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|_L^2``."""
-        if not np.all(self.is_tangent(x, v)):
+        if not np.all(self._tangent_ok(x, v, self.atol)):
             raise NotTangentError(
                 f"{self.name}: {name} is not tangent at the point: |<point, {name}>_L| up to "
                 f"{np.max(np.abs(minkowski_inner(x, v))):.3g} (tolerance {self.atol:g})"

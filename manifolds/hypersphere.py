@@ -11,7 +11,6 @@ import numpy as np
 
 from .constant_curvature import ConstantCurvatureQuadric, ratio
 from .errors import CutLocusError, ManifoldError, NotTangentError
-from .validation import as_float_array, check_shape
 
 __all__ = ["Hypersphere"]
 
@@ -53,35 +52,13 @@ class Hypersphere(ConstantCurvatureQuadric):
     form = staticmethod(_dot)
 
     # ------------------------------------------------------------------ checks
-    def belongs(self, point, atol: float | None = None):
-        """Whether ``| |x|^2 - 1 | <= atol`` (default ``self.atol``), per batch entry."""
-        tol = self.atol if atol is None else atol
-        arr = np.asarray(point, dtype=float)
-        if arr.ndim < 1 or arr.shape[-1:] != self.point_shape:
-            return False
+    def _on_manifold(self, arr, tol):
+        """``| |x|^2 - 1 | <= tol``; a NaN or infinite entry fails it too."""
         return np.abs(_dot(arr, arr) - 1.0) <= tol
 
-    def is_tangent(self, point, vector, atol: float | None = None):
-        """Whether ``|<x, v>| <= atol (1 + |v|)`` (default ``self.atol``)."""
-        tol = self.atol if atol is None else atol
-        x = np.asarray(point, dtype=float)
-        v = np.asarray(vector, dtype=float)
-        if v.ndim < 1 or v.shape[-1:] != self.point_shape:
-            return False
+    def _tangent_ok(self, x, v, tol):
+        """``|<x, v>| <= tol (1 + |v|)``."""
         return np.abs(_dot(x, v)) <= tol * (1.0 + np.sqrt(_dot(v, v)))
-
-    def _point(self, point, name: str) -> np.ndarray:
-        """Validated point: one fused norm test, the full diagnosis only on failure.
-
-        A NaN or infinite entry makes ``|x|^2`` non-finite, so the single test
-        ``| |x|^2 - 1 | <= atol`` covers finiteness and membership at once.
-        """
-        label = f"{self.name}: {name}"
-        arr = as_float_array(point, label)
-        check_shape(arr, self.point_shape, label)
-        if not (np.abs(_dot(arr, arr) - 1.0) <= self.atol).all():
-            return self.check_point(arr, name)
-        return arr
 
     def _tangent(self, x, v, name: str = "tangent"):
         """Check tangency of ``v`` at ``x``; return ``v`` projected and ``|v|^2``.
