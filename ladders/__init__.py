@@ -7,15 +7,7 @@ Ladders and symmetry errors use only the connection API of :mod:`manifolds`
 from ._rungs import LadderTrajectory
 from .area_strain import area_strain, area_strain_error, cell_areas
 from .benchmark_shapes import bent_ellipsoid
-from .cohort import (
-    Cohort,
-    CohortError,
-    MeshFolderError,
-    Subject,
-    SubjectParameters,
-    SyntheticLVModel,
-    make_synthetic_cohort,
-)
+from .cohort import Cohort, CohortError, MeshFolderError, Subject
 from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
 from .fanning import FanningResult, fanning_scheme, fanning_transport
 from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
@@ -30,6 +22,7 @@ from .symmetry_errors import (
     symmetry_errors,
     transvectivity_error,
 )
+from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
 from .vtk_io import read_vtk, write_vtk
 
 __all__ = [

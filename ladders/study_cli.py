@@ -99,8 +99,8 @@ def add_study_parser(sub) -> None:
 
 
 def _load_cohort(args):
-    from .cohort import make_synthetic_cohort
     from .mesh_io import read_cohort
+    from .synthetic_lv import make_synthetic_cohort
 
     n = args.subjects
     if args.meshes is not None:

@@ -6,10 +6,8 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ladders.cohort import (
-    Cohort,
-    CohortError,
-    Subject,
+from ladders.cohort import Cohort, CohortError, Subject
+from ladders.synthetic_lv import (
     SubjectParameters,
     SyntheticLVModel,
     grid_shape,

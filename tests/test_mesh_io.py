@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ladders.cohort import Cohort, Subject, make_synthetic_cohort
+from ladders.cohort import Cohort, Subject
 from ladders.mesh_io import (
     MeshFolderError,
     read_cohort,
@@ -13,6 +13,7 @@ from ladders.mesh_io import (
     write_mesh,
     write_vtk,
 )
+from ladders.synthetic_lv import make_synthetic_cohort
 
 COHORT = make_synthetic_cohort(n_subjects=3, grid=(9, 5), seed=2)
 

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from ladders.cli import main
-from ladders.cohort import make_synthetic_cohort
 from ladders.mesh_io import write_cohort
 from ladders.study import ERROR_NAMES, StudyConfig
 from ladders.study_report import summarize, write_report
 from ladders.study_runner import run_study
+from ladders.synthetic_lv import make_synthetic_cohort
 
 ALPHA2 = (0.01, 1.0, 100.0)
 CONFIG = StudyConfig(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
