@@ -8,7 +8,10 @@ best and median reported; once for 2,562 vertices), then a warm-started run
 towards convergence. Each case runs in its own subprocess so that its peak resident
 memory (``ru_maxrss``) is measured alone.
 
-Usage: ``python benchmarks/bench_registration.py [--quick] [--backend numba|numpy]``.
+``--scale s`` multiplies the twist and the bend by ``s`` (the table of
+``docs/lddmm.md`` on how the 100-iteration gap depends on the deformation's size).
+
+Usage: ``python benchmarks/bench_registration.py [--quick] [--backend numba|numpy] [--scale s]``.
 """
 
 from __future__ import annotations
@@ -30,21 +33,21 @@ CASES = {
 }
 
 
-def problem(subdivisions: int):
+def problem(subdivisions: int, scale: float = 1.0):
     from ladders.benchmark_shapes import bent_ellipsoid
 
-    template, target, _ = bent_ellipsoid(subdivisions)
+    template, target, _ = bent_ellipsoid(subdivisions, twist=0.4 * scale, bend=0.2 * scale)
     return template, target
 
 
-def run_case(name: str, backend: str, max_extra: int, repeats: int) -> dict:
+def run_case(name: str, backend: str, max_extra: int, repeats: int, scale: float = 1.0) -> dict:
     from manifolds.control_points import resolve_control_points
     from manifolds.kernels import GaussianKernel
     from manifolds.numerics.optimizers import LBFGSOptions
     from manifolds.registration import register
 
     case = CASES[name]
-    template, target = problem(case["subdivisions"])
+    template, target = problem(case["subdivisions"], scale)
     cp = resolve_control_points(template, case["policy"], 0.5)
     kernel = GaussianKernel(0.5, backend=backend)
     # Load the compiled kernels (serial and parallel paths) so that JIT time is not counted.
@@ -96,6 +99,7 @@ def run_case(name: str, backend: str, max_extra: int, repeats: int) -> dict:
         rss_peak_mb=rss_peak,
         target_s=case["target_s"],
         target_mb=case["target_mb"],
+        scale=scale,
     )
 
 
@@ -103,7 +107,8 @@ def report(res: dict) -> list[str]:
     gap = (res["objective_100"] - res["objective_final"]) / res["objective_final"]
     conv = "converged" if res["converged"] else "not converged"
     lines = [
-        f"[{res['case']}] {res['n_points']} points, {res['n_cp']} control points",
+        f"[{res['case']}] {res['n_points']} points, {res['n_cp']} control points"
+        + (f", deformation scaled by {res['scale']:g}" if res["scale"] != 1.0 else ""),
         f"  100 iterations: {res['seconds_100']:.2f} s best, {res['seconds_100_median']:.2f} s "
         f"median of {res['repeats']} ({res['evals_100']} evaluations), "
         f"objective {res['objective_100']:.6g}, RMS residual {res['rms_100']:.4g}",
@@ -129,16 +134,19 @@ def main(argv=None):
     parser.add_argument("--case", help=argparse.SUPPRESS)
     parser.add_argument("--max-extra", type=int, default=3000)
     parser.add_argument("--repeats", type=int, default=3, help="timed runs of 100 iterations")
+    parser.add_argument("--scale", type=float, default=1.0, help="factor on the twist and bend")
     args = parser.parse_args(argv)
     if args.case:
-        print(json.dumps(run_case(args.case, args.backend, args.max_extra, args.repeats)))
+        print(
+            json.dumps(run_case(args.case, args.backend, args.max_extra, args.repeats, args.scale))
+        )
         return
     names = [n for n in CASES if not (args.quick and n == "dense-2562")]
     for name in names:
         extra = args.max_extra if name != "dense-2562" else min(args.max_extra, 900)
         repeats = args.repeats if name != "dense-2562" else 1
         cmd = [sys.executable, __file__, "--case", name, "--backend", args.backend]
-        cmd += ["--repeats", str(repeats)]
+        cmd += ["--repeats", str(repeats), "--scale", str(args.scale)]
         out = subprocess.run(
             cmd + ["--max-extra", str(extra)], capture_output=True, text=True, check=True
         )
