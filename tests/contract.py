@@ -17,6 +17,23 @@ from manifolds import ManifoldError, RiemannianManifold
 SEEDS = st.integers(min_value=0, max_value=2**32 - 1)
 
 
+def assert_curvature_matches_distance_expansion(space, rng, rtol, sign=None, eps=1e-2):
+    """Check ``<R(u, v) v, u>`` against the small-distance expansion of ``dist``.
+
+    ``d(Exp_x(eps u), Exp_x(eps v))^2 = eps^2 |u - v|^2 - eps^4 / 3 <R(u, v) v, u> + O(eps^6)``
+    at a random point ``x`` and random tangents ``u, v``; ``sign`` (``+1`` or ``-1``),
+    when given, is the expected sign of ``<R(u, v) v, u>``.
+    """
+    x = space.random_point(rng)
+    u, v = space.random_tangent(x, rng), space.random_tangent(x, rng)
+    d2 = space.dist(space.exp(x, eps * u), space.exp(x, eps * v)) ** 2
+    measured = 3 * (eps**2 * space.inner(x, u - v, u - v) - d2) / eps**4
+    expected = space.inner(x, space.curvature(x, u, v, v), u)
+    if sign is not None:
+        assert np.sign(expected) == sign
+    np.testing.assert_allclose(measured, expected, rtol=rtol)
+
+
 class ConnectionContract:
     """Round trips, symmetry and midpoint properties, batching, bad input."""
 

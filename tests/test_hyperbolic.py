@@ -6,7 +6,7 @@ import pytest
 from manifolds.errors import ManifoldError, NotOnManifoldError, NotTangentError
 from manifolds.hyperbolic import Hyperbolic, minkowski_inner
 
-from .contract import ConnectionContract
+from .contract import ConnectionContract, assert_curvature_matches_distance_expansion
 
 
 def unit_tangent(space, x, rng):
@@ -93,16 +93,8 @@ class TestHyperbolicSpecific:
         assert zero.shape == x.shape and not zero.any()
 
     def test_curvature_matches_distance_expansion(self):
-        # d(Exp_x(eps u), Exp_x(eps v))^2 = eps^2 |u - v|^2 - eps^4/3 <R(u,v)v, u> + O(eps^6)
         rng = np.random.default_rng(21)
-        x = self.space.random_point(rng)
-        u, v = self.space.random_tangent(x, rng), self.space.random_tangent(x, rng)
-        eps = 1e-2
-        d2 = self.space.dist(self.space.exp(x, eps * u), self.space.exp(x, eps * v)) ** 2
-        measured = 3 * (eps**2 * self.space.inner(x, u - v, u - v) - d2) / eps**4
-        expected = self.space.inner(x, self.space.curvature(x, u, v, v), u)
-        assert expected < 0
-        np.testing.assert_allclose(measured, expected, rtol=1e-3)
+        assert_curvature_matches_distance_expansion(self.space, rng, rtol=1e-3, sign=-1)
 
     def test_transport_closed_form(self):
         rng = np.random.default_rng(22)
