@@ -25,9 +25,9 @@ TARGET_MB = 1024.0
 
 
 def run_case(policy: str, backend: str, iterations: int) -> dict:
-    from ladders.benchmark_shapes import bent_ellipsoid
+    from ladders.study.benchmark_shapes import bent_ellipsoid
     from manifolds import LDDMMLandmarks
-    from manifolds.kernels import numba_available
+    from manifolds.lddmm.kernels import numba_available
 
     if backend == "numba" and not numba_available():
         return {"skipped": "numba not installed"}

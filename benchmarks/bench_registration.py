@@ -34,17 +34,17 @@ CASES = {
 
 
 def problem(subdivisions: int, scale: float = 1.0):
-    from ladders.benchmark_shapes import bent_ellipsoid
+    from ladders.study.benchmark_shapes import bent_ellipsoid
 
     template, target, _ = bent_ellipsoid(subdivisions, twist=0.4 * scale, bend=0.2 * scale)
     return template, target
 
 
 def run_case(name: str, backend: str, max_extra: int, repeats: int, scale: float = 1.0) -> dict:
-    from manifolds.control_points import resolve_control_points
-    from manifolds.kernels import GaussianKernel
+    from manifolds.lddmm.control_points import resolve_control_points
+    from manifolds.lddmm.kernels import GaussianKernel
+    from manifolds.lddmm.registration import register
     from manifolds.numerics.optimizers import LBFGSOptions
-    from manifolds.registration import register
 
     case = CASES[name]
     template, target = problem(case["subdivisions"], scale)

@@ -25,7 +25,15 @@ TARGETS_S = {"default": 600.0, "full": 1800.0}
 
 def run(setting: str, backend: str, jobs: int) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
-        args = [sys.executable, "-m", "ladders.cli", "study", "--output", tmp, "--no-progress"]
+        args = [
+            sys.executable,
+            "-m",
+            "ladders.study.cli",
+            "study",
+            "--output",
+            tmp,
+            "--no-progress",
+        ]
         args += ["--kernel-backend", backend, "--jobs", str(jobs)]
         if setting == "full":
             args.append("--full")

@@ -1,17 +1,20 @@
-"""Generic algorithms on spaces with an affine connection, and the paper's study.
+"""Generic algorithms on spaces with an affine connection.
 
-Ladders and symmetry errors use only the connection API of :mod:`manifolds`
-(``exp``, ``log``, ``midpoint``, ``symmetry``), so they run unchanged on every space.
+Everything here uses only the connection API of :mod:`manifolds` (``exp``,
+``log``, ``midpoint``, ``symmetry``, ``transvection``), so it runs unchanged on
+every space: the pole ladder and Schild's ladder (one rung driver), the fanning
+scheme, the paper's symmetry errors, log-log convergence studies and the
+``nabla R`` expansion of transvections.
+
+The paper's application (cohorts, mesh I/O, area strain, the Section 3 study,
+its report and the ``symladders`` command line) lives in :mod:`ladders.study`,
+which this package never imports.
 """
 
-from ._rungs import LadderTrajectory
-from .area_strain import area_strain, area_strain_error, cell_areas
-from .benchmark_shapes import bent_ellipsoid
-from .cohort import Cohort, CohortError, MeshFolderError, Subject
 from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
 from .fanning import FanningResult, fanning_scheme, fanning_transport
-from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
 from .pole_ladder import pole_ladder
+from .rungs import LadderTrajectory
 from .schild_ladder import schild_ladder
 from .symmetry_errors import (
     SymmetryErrors,
@@ -22,8 +25,7 @@ from .symmetry_errors import (
     symmetry_errors,
     transvectivity_error,
 )
-from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
-from .vtk_io import read_vtk, write_vtk
+from .transvection_expansion import NABLA_R_COEFFICIENTS, transvection_expansion
 
 __all__ = [
     "LadderTrajectory",
@@ -42,22 +44,6 @@ __all__ = [
     "FanningResult",
     "fanning_scheme",
     "fanning_transport",
-    "area_strain",
-    "area_strain_error",
-    "cell_areas",
-    "bent_ellipsoid",
-    "Cohort",
-    "CohortError",
-    "MeshFolderError",
-    "Subject",
-    "SubjectParameters",
-    "SyntheticLVModel",
-    "make_synthetic_cohort",
-    "MESH_EXTENSIONS",
-    "read_cohort",
-    "read_mesh",
-    "write_cohort",
-    "write_mesh",
-    "read_vtk",
-    "write_vtk",
+    "NABLA_R_COEFFICIENTS",
+    "transvection_expansion",
 ]

@@ -66,7 +66,7 @@ def fanning_scheme(
 
     Parameters
     ----------
-    kernel : manifolds.kernels.GaussianKernel
+    kernel : manifolds.lddmm.GaussianKernel
     control_points : array, shape ``(n_cp, d)``
         Initial control points ``c_0``.
     geodesic_momenta : array, shape ``(n_cp, d)``

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ._rungs import LadderTrajectory, check_ladder_args, rung_points
+from .rungs import LadderTrajectory, check_ladder_args, rung_points
 
 __all__ = ["schild_ladder"]
 

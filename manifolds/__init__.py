@@ -1,4 +1,15 @@
-"""Spaces with an affine connection, known through ``exp`` and ``log``."""
+"""Spaces with an affine connection, known through ``exp`` and ``log``.
+
+The abstract classes (:class:`Connection`, :class:`RiemannianManifold`) derive the
+geodesic, midpoint, geodesic symmetry and transvection from ``exp`` and ``log``.
+Concrete spaces: :class:`Euclidean`, the closed-form symmetric spaces
+(:class:`Hypersphere`, :class:`Hyperbolic`, :class:`SPDMatrices`), metric-matrix
+fields (:class:`MetricField`, :class:`PoincareHalfPlane`, :class:`WarpedSurface`),
+the LDDMM landmark space (subpackage :mod:`manifolds.lddmm`) and the
+residual-augmented space :class:`ResidualAugmented`. Numerical methods live in
+:mod:`manifolds.numerics`; the contract tests for a new space in
+:mod:`manifolds.testing`.
+"""
 
 from .connection import Connection
 from .errors import (
@@ -12,11 +23,9 @@ from .errors import (
 from .euclidean import Euclidean
 from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
-from .kernels import GaussianKernel
-from .lddmm import LDDMMLandmarks
+from .lddmm import GaussianKernel, LDDMMLandmarks, RegistrationResult, register
 from .metric_field import MetricField
 from .poincare_half_plane import PoincareHalfPlane
-from .registration import RegistrationResult, inverse_consistency, register
 from .residual import ResidualAugmented, ResidualTangent
 from .riemannian import RiemannianManifold
 from .spd import SPDMatrices
@@ -36,7 +45,6 @@ __all__ = [
     "GaussianKernel",
     "LDDMMLandmarks",
     "RegistrationResult",
-    "inverse_consistency",
     "register",
     "ResidualAugmented",
     "ResidualTangent",

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from ladders.cli import main
+from ladders.study.cli import main
 
 
 def test_validate_writes_outputs_and_numbers_hold(tmp_path, capsys):

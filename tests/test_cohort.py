@@ -6,8 +6,8 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ladders.cohort import Cohort, CohortError, Subject
-from ladders.synthetic_lv import (
+from ladders.study.cohort import Cohort, CohortError, Subject
+from ladders.study.synthetic_lv import (
     SubjectParameters,
     SyntheticLVModel,
     grid_shape,

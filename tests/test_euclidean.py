@@ -2,8 +2,7 @@ import numpy as np
 
 from ladders import pole_ladder, schild_ladder, symmetry_errors
 from manifolds import Euclidean
-
-from .contract import ConnectionContract
+from manifolds.testing import ConnectionContract
 
 
 class TestEuclideanVector(ConnectionContract):

@@ -6,8 +6,8 @@ import pytest
 from ladders.convergence import loglog_slope
 from ladders.fanning import fanning_scheme, fanning_transport
 from manifolds.errors import ConvergenceError
-from manifolds.kernels import GaussianKernel
 from manifolds.lddmm import LDDMMLandmarks
+from manifolds.lddmm.kernels import GaussianKernel
 
 
 def _setup(seed=0, n=6, sigma=1.0):

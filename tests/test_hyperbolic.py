@@ -5,8 +5,7 @@ import pytest
 
 from manifolds.errors import ManifoldError, NotOnManifoldError, NotTangentError
 from manifolds.hyperbolic import Hyperbolic, minkowski_inner
-
-from .contract import ConnectionContract, assert_curvature_matches_distance_expansion
+from manifolds.testing import ConnectionContract, assert_curvature_matches_distance_expansion
 
 
 def unit_tangent(space, x, rng):

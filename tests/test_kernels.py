@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from manifolds.errors import ManifoldError
-from manifolds.kernels import GaussianKernel, numba_available
+from manifolds.lddmm.kernels import GaussianKernel, numba_available
 
 SIGMA = 0.7
 
@@ -116,7 +116,7 @@ def test_invalid_parameters_raise():
 @pytest.mark.skipif(not numba_available(), reason="numba not installed")
 @pytest.mark.parametrize("dim", [2, 3])
 def test_compiled_backend_agrees_with_numpy(dim):
-    from manifolds import kernels_numba
+    from manifolds.lddmm import kernels_numba
 
     sq = np.linspace(0, 39.9, 2001)
     np.testing.assert_allclose(kernels_numba.gaussian(sq), np.exp(-sq), rtol=3e-14, atol=0)

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from manifolds.kernels import GaussianKernel
+from manifolds.lddmm.kernels import GaussianKernel
+from manifolds.lddmm.shooting import flow, hamiltonian, shoot, shooting_vjp
 from manifolds.numerics.integrators import RK4, get_integrator
-from manifolds.numerics.landmark_shooting import flow, hamiltonian, shoot, shooting_vjp
 
 SIGMA = 0.8
 

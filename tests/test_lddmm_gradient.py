@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from autograd import grad
 
-from manifolds.control_points import grid_control_points
-from manifolds.kernels import GaussianKernel, numba_available
+from manifolds.lddmm.control_points import grid_control_points
+from manifolds.lddmm.kernels import GaussianKernel, numba_available
+from manifolds.lddmm.registration import registration_objective
 from manifolds.numerics.integrators import RK2, RK4, Euler
-from manifolds.registration import registration_objective
 
 SIGMA = 0.6
 ALPHA = 0.3

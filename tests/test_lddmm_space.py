@@ -8,8 +8,7 @@ from ladders.schild_ladder import schild_ladder
 from ladders.symmetry_errors import symmetry_errors
 from manifolds.errors import ManifoldError
 from manifolds.lddmm import LDDMMLandmarks
-
-from .contract import ConnectionContract
+from manifolds.testing import ConnectionContract
 
 
 def small_space(**kw):

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from ladders.cohort import Cohort, Subject
-from ladders.mesh_io import (
+from ladders.study.cohort import Cohort, Subject
+from ladders.study.mesh_io import (
     MeshFolderError,
     read_cohort,
     read_mesh,
@@ -13,7 +13,7 @@ from ladders.mesh_io import (
     write_mesh,
     write_vtk,
 )
-from ladders.synthetic_lv import make_synthetic_cohort
+from ladders.study.synthetic_lv import make_synthetic_cohort
 
 COHORT = make_synthetic_cohort(n_subjects=3, grid=(9, 5), seed=2)
 

@@ -11,8 +11,7 @@ from manifolds.errors import ConvergenceError, NotOnManifoldError
 from manifolds.hyperbolic import Hyperbolic, minkowski_inner
 from manifolds.numerics.shooting import ShootingSolver
 from manifolds.poincare_half_plane import PoincareHalfPlane
-
-from .contract import ConnectionContract
+from manifolds.testing import ConnectionContract
 
 SPACE = PoincareHalfPlane()
 HYPERBOLOID = Hyperbolic(2)

@@ -6,8 +6,7 @@ import pytest
 from ladders import pole_ladder, symmetry_errors
 from manifolds import Euclidean
 from manifolds.residual import ResidualAugmented, ResidualTangent
-
-from .contract import ConnectionContract
+from manifolds.testing import ConnectionContract
 
 
 class RegularisedEuclidean(Euclidean):

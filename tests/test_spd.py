@@ -6,8 +6,7 @@ from scipy.linalg import expm, logm, sqrtm
 
 from manifolds.errors import ManifoldError, NotOnManifoldError, NotTangentError
 from manifolds.spd import SPDMatrices
-
-from .contract import ConnectionContract, assert_curvature_matches_distance_expansion
+from manifolds.testing import ConnectionContract, assert_curvature_matches_distance_expansion
 
 
 class TestSPD2(ConnectionContract):

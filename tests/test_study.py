@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ladders.cli import main
-from ladders.mesh_io import write_cohort
-from ladders.study import ERROR_NAMES, StudyConfig
-from ladders.study_report import summarize, write_report
-from ladders.study_runner import run_study
-from ladders.synthetic_lv import make_synthetic_cohort
+from ladders.study.cli import main
+from ladders.study.mesh_io import write_cohort
+from ladders.study.pipeline import ERROR_NAMES, StudyConfig
+from ladders.study.report import summarize, write_report
+from ladders.study.runner import run_study
+from ladders.study.synthetic_lv import make_synthetic_cohort
 
 ALPHA2 = (0.01, 1.0, 100.0)
 CONFIG = StudyConfig(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
@@ -119,7 +119,12 @@ def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
     ]  # fmt: skip
     # Kill the run as soon as the first subject is stored, then resume.
     proc = subprocess.Popen(
-        [sys.executable, "-c", "import sys; from ladders.cli import main; sys.exit(main())", *args],
+        [
+            sys.executable,
+            "-c",
+            "import sys; from ladders.study.cli import main; sys.exit(main())",
+            *args,
+        ],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         cwd=Path(__file__).resolve().parents[1],
@@ -139,7 +144,7 @@ def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
 
 
 def test_cli_rejects_mismatched_meshes(tmp_path, capsys):
-    from ladders.mesh_io import write_mesh
+    from ladders.study.mesh_io import write_mesh
 
     meshes = write_cohort(COHORT.head(1), tmp_path / "meshes", ext="ply")
     other = make_synthetic_cohort(1, grid=(6, 4), seed=1)

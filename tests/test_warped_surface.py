@@ -6,9 +6,8 @@ import pytest
 
 from manifolds.errors import ConvergenceError, ManifoldError, NotOnManifoldError
 from manifolds.numerics.shooting import ShootingSolver
+from manifolds.testing import ConnectionContract
 from manifolds.warped_surface import WarpedSurface
-
-from .contract import ConnectionContract
 
 
 def cosh_surface(**kwargs):

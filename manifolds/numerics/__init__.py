@@ -2,7 +2,6 @@
 
 from .geodesic_ode import GeodesicDomainError, GeodesicIntegrator, GeodesicSolution
 from .integrators import RK2, RK4, Euler, Integrator, get_integrator
-from .landmark_shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
 from .optimizers import LBFGSOptions, minimize_lbfgsb
 from .shooting import ShootingSolver
 
@@ -16,11 +15,6 @@ __all__ = [
     "RK2",
     "RK4",
     "get_integrator",
-    "ShootingResult",
-    "flow",
-    "hamiltonian",
-    "shoot",
-    "shooting_vjp",
     "LBFGSOptions",
     "minimize_lbfgsb",
 ]

@@ -6,15 +6,14 @@ initial momenta ``mu`` at fixed control points ``c`` (paper, eq. 3)::
     C(mu) = || S - phi_1(T) ||_2^2 + alpha^2 || v_0 ||_H^2,
     || v_0 ||_H^2 = sum_ij K(c_i, c_j) mu_i . mu_j,
 
-where ``phi_1`` is the discrete flow of :mod:`manifolds.numerics.landmark_shooting`.
+where ``phi_1`` is the discrete flow of :mod:`manifolds.lddmm.shooting`.
 The gradient is exact for the discretised objective: the data term is
 back-propagated through the Runge-Kutta steps by a hand-written adjoint and
 the regulariser contributes ``2 alpha^2 K mu``.
 
 The optimiser (L-BFGS-B) works on preconditioned variables ``z = R^T mu``
-where ``R R^T = K_xc^T K_xc + alpha^2 K_cc + eps I`` is the Gauss-Newton
-Hessian of the linearised problem (``phi_1(T) ~ T + K_xc mu``), and starts from
-the minimiser of that linearised problem. See ``docs/lddmm.md``.
+(:mod:`manifolds.lddmm.preconditioner`) and starts from the minimiser of the
+linearised problem. See ``docs/lddmm.md``.
 """
 
 from __future__ import annotations
@@ -23,23 +22,19 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 
-from .errors import ConvergenceWarning
+from ..errors import ConvergenceWarning
+from ..numerics.integrators import Integrator
+from ..numerics.optimizers import LBFGSOptions, minimize_lbfgsb
 from .kernels import GaussianKernel
-from .numerics.integrators import Integrator
-from .numerics.landmark_shooting import shoot, shooting_vjp
-from .numerics.optimizers import LBFGSOptions, minimize_lbfgsb
+from .preconditioner import make_preconditioner
+from .shooting import shoot, shooting_vjp
 
 __all__ = [
     "RegistrationResult",
     "registration_objective",
     "register",
-    "inverse_consistency",
-    "PRECONDITION_MAX_CP",
 ]
-
-PRECONDITION_MAX_CP = 4000  # largest n_cp for the dense Cholesky preconditioner
 
 
 @dataclass
@@ -140,33 +135,6 @@ def registration_objective(
     return value, g_mu, deformed, rkhs_sq
 
 
-def _preconditioner(kernel, template, control_points, alpha, dense, rel_ridge):
-    """Lower Cholesky factor of ``K_xc^T K_xc + alpha^2 K_cc + eps I``."""
-    k_cc = kernel.matrix(control_points)
-    k_xc = k_cc if dense else kernel.matrix(template, control_points)
-    gram = k_xc.T @ k_xc
-    gram += alpha**2 * k_cc
-    del k_cc, k_xc
-    eps = rel_ridge * float(np.trace(gram)) / gram.shape[0]
-    gram[np.diag_indices_from(gram)] += eps
-    return scipy.linalg.cholesky(gram, lower=True, overwrite_a=True, check_finite=False)
-
-
-def _triangular_solver(kernel: GaussianKernel):
-    """``(L, B, transpose) -> L^{-1} B`` or ``L^{-T} B``: serial compiled loop or scipy."""
-    if kernel.backend == "numba":
-        from .kernels_numba import solve_lower
-
-        return solve_lower
-
-    def solve(chol, rhs, transpose=False):
-        return scipy.linalg.solve_triangular(
-            chol, rhs, lower=True, trans="T" if transpose else "N", check_finite=False
-        )
-
-    return solve
-
-
 def register(
     template,
     target,
@@ -198,8 +166,8 @@ def register(
         preconditioner is used, zero otherwise.
     options : LBFGSOptions, optional
     precondition : bool, default True
-        Optimise ``z = R^T mu`` (dense Cholesky, used for ``n_cp <= PRECONDITION_MAX_CP``;
-        above, a diagonal scaling is used).
+        Optimise ``z = R^T mu`` (see :mod:`manifolds.lddmm.preconditioner`: dense
+        Cholesky up to ``PRECONDITION_MAX_CP`` control points, a diagonal scaling above).
     rel_ridge : float
         Ridge of the preconditioner relative to the mean of its diagonal.
     warn : bool
@@ -211,40 +179,11 @@ def register(
     dense = _is_dense(template, cp)
     n_cp, dim = cp.shape
     alpha = float(alpha)
-
-    chol = None
-    diag = None
-    if precondition and n_cp <= PRECONDITION_MAX_CP:
-        chol = np.ascontiguousarray(_preconditioner(kernel, template, cp, alpha, dense, rel_ridge))
-        tri_solve = _triangular_solver(kernel)
-    elif precondition:
-        k2 = GaussianKernel(kernel.sigma / np.sqrt(2.0), backend=kernel.backend)
-        diag = k2.convolve(cp, template, np.ones((template.shape[0], 1)))[:, 0] + alpha**2
-        diag = np.sqrt(np.maximum(diag, 1e-12 * diag.max(initial=1.0)))
-
-    def to_mu(z):
-        z = z.reshape(n_cp, dim)
-        if chol is not None:
-            return tri_solve(chol, z, True)
-        return z / diag[:, None] if diag is not None else z
-
-    def to_z(mu):
-        if chol is not None:
-            return chol.T @ mu
-        return mu * diag[:, None] if diag is not None else mu
-
-    def grad_to_z(g):
-        if chol is not None:
-            return tri_solve(chol, g, False)
-        return g / diag[:, None] if diag is not None else g
-
+    pre = make_preconditioner(kernel, template, cp, alpha, dense, precondition, rel_ridge)
     if initial_momenta is not None:
         mu0 = np.asarray(initial_momenta, dtype=float).reshape(n_cp, dim)
-    elif chol is not None:
-        rhs = kernel.convolve(cp, template, target - template)  # K_xc^T (S - T)
-        mu0 = scipy.linalg.cho_solve((chol, True), rhs, check_finite=False)
     else:
-        mu0 = np.zeros((n_cp, dim))
+        mu0 = pre.linearised_start(kernel, template, target, cp)
 
     last: dict = {}
 
@@ -253,22 +192,23 @@ def register(
         so the start (which sets the scale) and the final iterate are not shot twice."""
         key = z.tobytes()
         if last.get("key") != key:
+            mu = pre.to_momenta(z.reshape(n_cp, dim))
             out = registration_objective(
-                kernel, template, target, cp, to_mu(z), alpha, integrator, n_steps
+                kernel, template, target, cp, mu, alpha, integrator, n_steps
             )
             last.update(key=key, out=out)
         return last["out"]
 
-    z0 = to_z(mu0).ravel()
+    z0 = pre.to_variables(mu0).ravel()
     f_init = evaluate(z0)[0]
     scale = f_init if f_init > 0 else 1.0
 
     def fun_and_grad(z):
         value, g_mu, _, _ = evaluate(z)
-        return value / scale, grad_to_z(g_mu).ravel() / scale
+        return value / scale, pre.gradient_to_variables(g_mu).ravel() / scale
 
     opt = minimize_lbfgsb(fun_and_grad, z0, options)
-    mu = to_mu(opt.x)
+    mu = pre.to_momenta(opt.x.reshape(n_cp, dim))
     value, _, deformed, rkhs_sq = evaluate(opt.x)
     resid = target - deformed
     err = float(np.sqrt((resid * resid).sum()))
@@ -296,29 +236,3 @@ def register(
             stacklevel=2,
         )
     return result
-
-
-def inverse_consistency(space, template, shape) -> float:
-    """Inverse consistency error of the registrations between ``template`` and ``shape``.
-
-    With ``phi_TS`` the deformation registering ``T`` onto ``S`` and ``phi_ST``
-    the one registering ``S`` onto ``T`` (each shot from its own template's
-    control points), returns ``|| phi_ST(phi_TS(T)) - T ||_2``, the L2 norm
-    over the vertices of how far the composition is from the identity on ``T``.
-    It is zero when ``phi_ST = phi_TS^{-1}`` on ``T``.
-
-    Parameters
-    ----------
-    space : LDDMMLandmarks
-    template, shape : arrays, shape ``(k, d)``
-
-    Returns
-    -------
-    float
-    """
-    template = space.check_point(template, "template")
-    shape = space.check_point(shape, "shape")
-    forward = space.register(template, shape)
-    backward = space.register(shape, template)
-    back = space.flow(shape, backward.momenta, forward.deformed)
-    return float(np.sqrt(((back - template) ** 2).sum()))

@@ -1,4 +1,4 @@
-"""Compiled Gaussian-kernel sums (optional backend of :mod:`manifolds.kernels`, needs numba).
+"""Compiled Gaussian-kernel sums (optional backend of :mod:`manifolds.lddmm.kernels`, needs numba).
 
 The same four sums as the numpy reference, written as fused loops over pairs
 of points: each kernel value is computed and consumed at once, so no

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from .cohort import Subject
-from .study import StudyConfig, run_subject
-from .study_store import SubjectStore, array_digest, atomic_write_text, config_hash
+from .pipeline import StudyConfig, run_subject
+from .store import SubjectStore, array_digest, atomic_write_text, config_hash
 
 __all__ = ["StudyOutcome", "run_study"]
 

@@ -17,15 +17,16 @@ from dataclasses import asdict
 
 import numpy as np
 
-from .connection import Connection
+from ..connection import Connection
+from ..errors import ManifoldError
+from ..numerics.integrators import Integrator, get_integrator
+from ..numerics.optimizers import LBFGSOptions
+from ..validation import check_array
 from .control_points import AUTO_THRESHOLD, resolve_control_points
-from .errors import ManifoldError
 from .kernels import GaussianKernel
-from .numerics.integrators import Integrator, get_integrator
-from .numerics.landmark_shooting import shoot
-from .numerics.optimizers import LBFGSOptions
 from .registration import RegistrationResult, register
-from .validation import check_array
+from .shapes import random_shape
+from .shooting import shoot
 
 __all__ = ["LDDMMLandmarks"]
 
@@ -44,7 +45,7 @@ class LDDMMLandmarks(Connection):
     alpha : float
         Regularisation of the registration: ``C = ||S - phi_1(T)||^2 + alpha^2 ||v_0||_H^2``.
     control_points : {"auto", "dense", "grid"} or array of shape ``(n_cp, d)``, default "auto"
-        Control-point policy (see :mod:`manifolds.control_points`).
+        Control-point policy (see :mod:`manifolds.lddmm.control_points`).
     integrator : {"euler", "rk2", "rk4"} or Integrator, default "euler"
     n_steps : int, default 10
     optimizer : LBFGSOptions or dict, optional
@@ -282,6 +283,30 @@ class LDDMMLandmarks(Connection):
         """Forget cached registrations."""
         self._cache.clear()
 
+    def inverse_consistency(self, template, shape) -> float:
+        """Inverse consistency error of the registrations between ``template`` and ``shape``.
+
+        With ``phi_TS`` the deformation registering ``T`` onto ``S`` and ``phi_ST``
+        the one registering ``S`` onto ``T`` (each shot from its own template's
+        control points), returns ``|| phi_ST(phi_TS(T)) - T ||_2``, the L2 norm
+        over the vertices of how far the composition is from the identity on ``T``
+        (paper, Table 1). It is zero when ``phi_ST = phi_TS^{-1}`` on ``T``.
+
+        Parameters
+        ----------
+        template, shape : arrays, shape ``(k, d)``
+
+        Returns
+        -------
+        float
+        """
+        template = self.check_point(template, "template")
+        shape = self.check_point(shape, "shape")
+        forward = self.register(template, shape)
+        backward = self.register(shape, template)
+        back = self.flow(shape, backward.momenta, forward.deformed)
+        return float(np.sqrt(((back - template) ** 2).sum()))
+
     # ------------------------------------------------------------ metric
     def inner(self, point, u, v):
         """RKHS product ``sum_ij K(c_i, c_j) u_i . v_j`` at the control points of ``point``."""
@@ -296,31 +321,11 @@ class LDDMMLandmarks(Connection):
 
     # ------------------------------------------------------------ sampling
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
-        """A smooth random shape: a perturbed ellipse (d = 2) or ellipsoid (d = 3).
-
-        The landmarks are spread evenly on the unit circle or sphere (Fibonacci
-        lattice), scaled to semi-axes ``(1, 0.7[, 0.5])`` perturbed by 5 %, with
-        a smooth random radial modulation of about 5 % and a small translation.
-        """
-        if n_samples is not None:
-            return np.stack([self.random_point(rng) for _ in range(int(n_samples))])
+        """A smooth random shape of ``k`` landmarks (:func:`manifolds.lddmm.shapes.random_shape`)."""
         k, d = self.point_shape
-        if d == 2:
-            theta = 2 * np.pi * (np.arange(k) + rng.uniform()) / k
-            u = np.stack([np.cos(theta), np.sin(theta)], axis=1)
-            axes = np.array([1.0, 0.7])
-        else:
-            i = np.arange(k) + 0.5
-            z = 1 - 2 * i / k
-            phi = np.pi * (1 + 5**0.5) * i + 2 * np.pi * rng.uniform()
-            r = np.sqrt(np.maximum(1 - z**2, 0.0))
-            u = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-            axes = np.array([1.0, 0.7, 0.5])
-        axes = axes * (1 + 0.05 * rng.standard_normal(d))
-        lin = rng.standard_normal(d)
-        quad = rng.standard_normal((d, d))
-        radial = 1 + 0.05 * (u @ lin + np.einsum("ki,ij,kj->k", u, quad + quad.T, u) / 2)
-        return u * axes * radial[:, None] + 0.05 * rng.standard_normal(d)
+        if n_samples is not None:
+            return np.stack([random_shape(rng, k, d) for _ in range(int(n_samples))])
+        return random_shape(rng, k, d)
 
     def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
         """Random momenta at ``c(point)`` whose velocity at the control points has RMS ``scale``."""

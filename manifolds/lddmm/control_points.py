@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ManifoldError
-from .validation import check_array
+from ..errors import ManifoldError
+from ..validation import check_array
 
 __all__ = ["grid_control_points", "resolve_control_points", "POLICIES"]
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..kernels import GaussianKernel
-from .integrators import Integrator, get_integrator
+from ..numerics.integrators import Integrator, get_integrator
+from .kernels import GaussianKernel
 
 __all__ = [
     "ShootingResult",

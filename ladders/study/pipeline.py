@@ -25,13 +25,12 @@ import numpy as np
 
 from manifolds.errors import ConvergenceWarning
 from manifolds.lddmm import LDDMMLandmarks
-from manifolds.registration import inverse_consistency
 from manifolds.residual import ResidualAugmented
 
+from ..fanning import fanning_transport
+from ..symmetry_errors import l2_distance, symmetry_errors
 from .area_strain import area_strain, area_strain_error
 from .cohort import Subject
-from .fanning import fanning_transport
-from .symmetry_errors import l2_distance, symmetry_errors
 
 __all__ = ["StudyConfig", "run_subject", "VARIANTS", "ERROR_NAMES"]
 
@@ -104,7 +103,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         "registration_rms": float(reg.rms_error),
         "rkhs_norm": float(reg.rkhs_norm),
         "converged": bool(reg.converged),
-        "inverse_consistency": float(inverse_consistency(space, t, s)),
+        "inverse_consistency": float(space.inverse_consistency(t, s)),
     }
     las = {"subject": las_subject}
     for variant in VARIANTS:

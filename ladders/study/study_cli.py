@@ -146,9 +146,9 @@ def _backend(args):
 
 def run_study_command(args) -> int:
     """Run the study from parsed command-line arguments."""
-    from .study import StudyConfig
-    from .study_report import summarize, summary_markdown, write_report
-    from .study_runner import run_study
+    from .pipeline import StudyConfig
+    from .report import summarize, summary_markdown, write_report
+    from .runner import run_study
 
     start = time.perf_counter()
     cohort, description = _load_cohort(args)

@@ -3,20 +3,16 @@
 A :class:`Cohort` holds what the paper's Section 3 study needs: a population
 atlas ``T`` and, per subject, an end-diastole shape ``S`` and an end-systole
 shape ``S'``, all meshes in vertex correspondence (one shared ``faces`` array).
-Cohorts come from a folder of meshes (:func:`ladders.mesh_io.read_cohort`) or
-from the synthetic generator :func:`ladders.synthetic_lv.make_synthetic_cohort`.
+Cohorts come from a folder of meshes (:func:`ladders.study.mesh_io.read_cohort`) or
+from the synthetic generator :func:`ladders.study.synthetic_lv.make_synthetic_cohort`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
-import trimesh
-
-if TYPE_CHECKING:
-    from .synthetic_lv import SubjectParameters
 
 __all__ = [
     "CohortError",
@@ -36,12 +32,17 @@ class MeshFolderError(CohortError):
 
 @dataclass
 class Subject:
-    """One subject: end-diastole ``ed`` and end-systole ``es`` vertices, each ``(k, 3)``."""
+    """One subject: end-diastole ``ed`` and end-systole ``es`` vertices, each ``(k, 3)``.
+
+    ``parameters`` holds whatever produced the shapes, e.g. the
+    :class:`ladders.study.synthetic_lv.SubjectParameters` of a synthetic subject
+    (``None`` for meshes read from files).
+    """
 
     name: str
     ed: np.ndarray
     es: np.ndarray
-    parameters: SubjectParameters | None = None
+    parameters: Any = None
 
 
 @dataclass
@@ -119,10 +120,6 @@ class Cohort:
     def head(self, n: int) -> Cohort:
         """The cohort restricted to its first ``n`` subjects."""
         return Cohort(self.atlas, self.faces, list(self.subjects[:n]), self.source)
-
-    def mesh(self, vertices) -> trimesh.Trimesh:
-        """A ``trimesh.Trimesh`` with the cohort's faces (vertex order kept)."""
-        return trimesh.Trimesh(np.asarray(vertices, dtype=float), self.faces, process=False)
 
 
 def _vertices(x, name: str) -> np.ndarray:

@@ -30,11 +30,11 @@ from manifolds.poincare_half_plane import PoincareHalfPlane
 from manifolds.spd import SPDMatrices
 from manifolds.warped_surface import WarpedSurface
 
-from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
-from .pole_ladder import pole_ladder
-from .schild_ladder import schild_ladder
-from .symmetry_errors import transvectivity_error
-from .transvection_expansion import transvection_expansion
+from ..convergence import ConvergenceCurve, ladder_convergence, loglog_slope
+from ..pole_ladder import pole_ladder
+from ..schild_ladder import schild_ladder
+from ..symmetry_errors import transvectivity_error
+from ..transvection_expansion import transvection_expansion
 
 __all__ = ["ValidationReport", "run_validation"]
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .study import ERROR_NAMES, VARIANTS
-from .study_store import atomic_write_text
+from .pipeline import ERROR_NAMES, VARIANTS
+from .store import atomic_write_text
 
 __all__ = ["summarize", "summary_markdown", "write_report"]
 

@@ -11,7 +11,7 @@ Hamiltonian shooting and its adjoint are
 * :meth:`GaussianKernel.convolve_vjp` and :meth:`GaussianKernel.hamiltonian_vjp`,
   their vector-Jacobian products (the building blocks of the adjoint pass).
 
-An optional compiled backend (:mod:`manifolds.kernels_numba`, needs ``numba``)
+An optional compiled backend (:mod:`manifolds.lddmm.kernels_numba`, needs ``numba``)
 computes the same sums with fused loops and no ``k x n`` temporaries; the
 numpy code here is the reference it is tested against.
 """
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from .errors import ManifoldError
+from ..errors import ManifoldError
 
 __all__ = ["GaussianKernel", "numba_available"]
 
@@ -82,6 +82,22 @@ class GaussianKernel:
 
     def __repr__(self) -> str:
         return f"GaussianKernel(sigma={self.sigma:g}, backend={self.backend!r})"
+
+    def with_sigma(self, sigma: float) -> GaussianKernel:
+        """A kernel of width ``sigma`` with this kernel's backend and block size."""
+        return GaussianKernel(sigma, backend=self.backend, block_size=self.block_size)
+
+    def solve_triangular(self, chol: np.ndarray, rhs: np.ndarray, transpose: bool = False):
+        """``L^{-1} rhs`` (or ``L^{-T} rhs``) for a lower-triangular ``chol``.
+
+        The compiled backend uses a serial loop (no BLAS threads inside the
+        optimiser); the numpy backend calls :func:`scipy.linalg.solve_triangular`.
+        """
+        if self._nb is not None:
+            return self._nb.solve_lower(chol, rhs, transpose)
+        return scipy.linalg.solve_triangular(
+            chol, rhs, lower=True, trans="T" if transpose else "N", check_finite=False
+        )
 
     # ------------------------------------------------------------ helpers
     def _rows(self, n_cols: int) -> int:

@@ -1,0 +1,54 @@
+"""The paper's application (Section 3), built on :mod:`manifolds` and :mod:`ladders`.
+
+- cohorts: :class:`Cohort`, the synthetic left-ventricle model
+  (:func:`make_synthetic_cohort`) and mesh folders (:func:`read_cohort`);
+- mesh I/O (:func:`read_mesh`, :func:`write_mesh`, legacy VTK);
+- local area strain (:func:`area_strain`, :func:`area_strain_error`);
+- the study: per-subject pipeline (:func:`run_subject`), the runner with its
+  resumable store (:func:`run_study`), the report (:func:`summarize`,
+  :func:`write_report`) and the ``symladders`` command line (:mod:`.cli`);
+- the analytic validation run (:func:`run_validation`) and the registration
+  benchmark's shapes (:func:`bent_ellipsoid`).
+"""
+
+from .analytic_validation import ValidationReport, run_validation
+from .area_strain import area_strain, area_strain_error, cell_areas
+from .benchmark_shapes import bent_ellipsoid
+from .cohort import Cohort, CohortError, MeshFolderError, Subject
+from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
+from .pipeline import ERROR_NAMES, VARIANTS, StudyConfig, run_subject
+from .report import summarize, summary_markdown, write_report
+from .runner import run_study
+from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
+from .vtk_io import read_vtk, write_vtk
+
+__all__ = [
+    "Cohort",
+    "CohortError",
+    "MeshFolderError",
+    "Subject",
+    "SubjectParameters",
+    "SyntheticLVModel",
+    "make_synthetic_cohort",
+    "MESH_EXTENSIONS",
+    "read_cohort",
+    "read_mesh",
+    "write_cohort",
+    "write_mesh",
+    "read_vtk",
+    "write_vtk",
+    "area_strain",
+    "area_strain_error",
+    "cell_areas",
+    "bent_ellipsoid",
+    "ERROR_NAMES",
+    "VARIANTS",
+    "StudyConfig",
+    "run_subject",
+    "run_study",
+    "summarize",
+    "summary_markdown",
+    "write_report",
+    "ValidationReport",
+    "run_validation",
+]

@@ -1,0 +1,35 @@
+"""The LDDMM landmark space and everything it is made of (paper, Section 2.1).
+
+- :mod:`.space`: :class:`LDDMMLandmarks`, the connection (``exp`` = Hamiltonian
+  shooting, ``log`` = registration, inverse consistency);
+- :mod:`.registration`: the registration objective (eq. 3), its exact gradient and
+  the L-BFGS-B driver; :mod:`.preconditioner`: the optimiser's change of variables;
+- :mod:`.shooting`: Hamiltonian shooting of control points and momenta and its adjoint;
+- :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
+  (numpy reference or the compiled :mod:`.kernels_numba`);
+- :mod:`.control_points`: control-point policies (dense, grid, auto);
+- :mod:`.shapes`: smooth random shapes (the space's ``random_point``).
+"""
+
+from .control_points import POLICIES, grid_control_points, resolve_control_points
+from .kernels import GaussianKernel, numba_available
+from .registration import RegistrationResult, register, registration_objective
+from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
+from .space import LDDMMLandmarks
+
+__all__ = [
+    "LDDMMLandmarks",
+    "GaussianKernel",
+    "numba_available",
+    "RegistrationResult",
+    "register",
+    "registration_objective",
+    "ShootingResult",
+    "flow",
+    "hamiltonian",
+    "shoot",
+    "shooting_vjp",
+    "POLICIES",
+    "grid_control_points",
+    "resolve_control_points",
+]
