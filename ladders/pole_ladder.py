@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .rungs import LadderTrajectory, check_ladder_args, rung_points
+from .rungs import run_ladder
 
 __all__ = ["pole_ladder"]
 
@@ -56,21 +56,12 @@ def pole_ladder(
     transported : tangent vector at ``end``
     trajectory : LadderTrajectory, only if ``return_trajectory``
     """
-    n = check_ladder_args(space, n_rungs, scaling_exponent)
-    scale = float(n) ** scaling_exponent
-    main, halves = rung_points(space, base, end, n)
-    traj = LadderTrajectory(main_points=main) if return_trajectory else None
-    w = tangent if scale == 1.0 else tangent * (1.0 / scale)
-    for i in range(n):
-        tip = space.exp(main[i], w)
-        reflected = space.symmetry(halves[i], tip)
-        w = -space.log(main[i + 1], reflected)
-        if traj is not None:
-            traj.pivots.append(halves[i])
-            traj.rung_tips.append(tip)
-            traj.reflected.append(reflected)
-    transported = w if scale == 1.0 else w * scale
-    if traj is None:
-        return transported
-    traj.end_point = space.exp(end, transported)
-    return transported, traj
+    return run_ladder(
+        space, base, end, tangent, _pole_rung, n_rungs, scaling_exponent, return_trajectory, True
+    )
+
+
+def _pole_rung(space, x, x_next, half, tip):
+    """``s_half(tip)`` then ``w = -Log_{x_next}(s_half(tip))`` (both symmetries of a rung)."""
+    reflected = space.symmetry(half, tip)
+    return half, reflected, -space.log(x_next, reflected)

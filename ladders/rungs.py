@@ -1,14 +1,25 @@
-"""Shared bookkeeping of the ladders: validation, rung points and trajectories."""
+"""The rung driver shared by the pole ladder and Schild's ladder.
+
+Both ladders cut the geodesic from ``base`` to ``end`` into ``n`` segments, scale
+the vector down by ``n**a``, carry it through one rung per segment and scale it
+back; they differ only in the rung (a :data:`Rung`).
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from manifolds.connection import Connection
 
-__all__ = ["LadderTrajectory", "check_ladder_args", "rung_points"]
+__all__ = ["LadderTrajectory", "Rung", "check_ladder_args", "rung_points", "run_ladder"]
+
+#: ``rung(space, x_i, x_next, half, tip) -> (pivot, reflected, w_next)``: one rung from
+#: ``x_i`` to ``x_next`` given the tip ``Exp_{x_i}(w_i)`` (``half`` is the main
+#: geodesic's point half-way, or ``None`` when the ladder does not ask for it).
+Rung = Callable
 
 
 @dataclass
@@ -67,3 +78,40 @@ def rung_points(space, base, end, n_rungs: int, with_halves: bool = True):
         return main, []
     halves = [space.exp(end, (1.0 - (i + 0.5) / n_rungs) * v) for i in range(n_rungs)]
     return main, halves
+
+
+def run_ladder(
+    space,
+    base,
+    end,
+    tangent,
+    rung: Rung,
+    n_rungs: int,
+    scaling_exponent: float,
+    return_trajectory: bool,
+    with_halves: bool,
+):
+    """Transport ``tangent`` from ``base`` to ``end`` through ``n_rungs`` applications of ``rung``.
+
+    The vector is divided by ``n_rungs ** scaling_exponent`` before the first
+    rung and multiplied back after the last. Returns the transported vector at
+    ``end`` and, if ``return_trajectory``, a :class:`LadderTrajectory`.
+    """
+    n = check_ladder_args(space, n_rungs, scaling_exponent)
+    scale = float(n) ** scaling_exponent
+    main, halves = rung_points(space, base, end, n, with_halves=with_halves)
+    traj = LadderTrajectory(main_points=main) if return_trajectory else None
+    w = tangent if scale == 1.0 else tangent * (1.0 / scale)
+    for i in range(n):
+        tip = space.exp(main[i], w)
+        half = halves[i] if with_halves else None
+        pivot, reflected, w = rung(space, main[i], main[i + 1], half, tip)
+        if traj is not None:
+            traj.pivots.append(pivot)
+            traj.rung_tips.append(tip)
+            traj.reflected.append(reflected)
+    transported = w if scale == 1.0 else w * scale
+    if traj is None:
+        return transported
+    traj.end_point = space.exp(end, transported)
+    return transported, traj

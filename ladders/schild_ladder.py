@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .rungs import LadderTrajectory, check_ladder_args, rung_points
+from .rungs import run_ladder
 
 __all__ = ["schild_ladder"]
 
@@ -26,22 +26,13 @@ def schild_ladder(
     The parameters and return values are those of :func:`ladders.pole_ladder`
     (here ``pivots`` holds the rung diagonals' midpoints).
     """
-    n = check_ladder_args(space, n_rungs, scaling_exponent)
-    scale = float(n) ** scaling_exponent
-    main, _ = rung_points(space, base, end, n, with_halves=False)
-    traj = LadderTrajectory(main_points=main) if return_trajectory else None
-    w = tangent if scale == 1.0 else tangent * (1.0 / scale)
-    for i in range(n):
-        tip = space.exp(main[i], w)
-        pivot = space.midpoint(tip, main[i + 1])
-        reflected = space.symmetry(pivot, main[i])
-        w = space.log(main[i + 1], reflected)
-        if traj is not None:
-            traj.pivots.append(pivot)
-            traj.rung_tips.append(tip)
-            traj.reflected.append(reflected)
-    transported = w if scale == 1.0 else w * scale
-    if traj is None:
-        return transported
-    traj.end_point = space.exp(end, transported)
-    return transported, traj
+    return run_ladder(
+        space, base, end, tangent, _schild_rung, n_rungs, scaling_exponent, return_trajectory, False
+    )
+
+
+def _schild_rung(space, x, x_next, half, tip):
+    """Geodesic parallelogram: ``m = midpoint(tip, x_next)``, ``w = Log_{x_next}(s_m(x))``."""
+    pivot = space.midpoint(tip, x_next)
+    reflected = space.symmetry(pivot, x)
+    return pivot, reflected, space.log(x_next, reflected)

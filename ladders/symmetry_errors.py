@@ -79,8 +79,8 @@ def transvectivity_error(space, template, shape, other, distance: Distance | Non
     """
     d = _distance(space, distance)
     m = space.midpoint(template, shape)
-    ladder = space.symmetry(template, space.symmetry(m, other))
-    opposite = space.symmetry(m, space.symmetry(shape, other))
+    ladder = space.transvection(template, m)(other)
+    opposite = space.transvection(m, shape)(other)
     return d(ladder, opposite)
 
 
@@ -128,11 +128,11 @@ def symmetry_errors(
     m = space.midpoint(template, shape)
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)
-    ladder = space.symmetry(template, s_m_other)
+    ladder = space.transvection(template, m)(other)  # s_T o s_M (S'): the pole ladder
     return SymmetryErrors(
         midpoint_distance=d(m, m_from_shape),
         centrality=d(space.symmetry(m, template), shape),
         involutivity=d(space.symmetry(m, s_m_other), other),
-        transvectivity=d(ladder, space.symmetry(m, space.symmetry(shape, other))),
+        transvectivity=d(ladder, space.transvection(m, shape)(other)),
         points={"midpoint": m, "reflected": s_m_other, "pole_ladder": ladder},
     )

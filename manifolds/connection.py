@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .errors import ManifoldError, NotOnManifoldError
+from .errors import NotOnManifoldError, NotTangentError
 from .validation import check_array
 
 __all__ = ["Connection"]
@@ -111,8 +111,6 @@ class Connection(ABC):
         tol = self.atol if atol is None else atol
         ok = np.asarray(self.is_tangent(point, arr, atol=tol))
         if not ok.all():
-            from .errors import NotTangentError
-
             raise NotTangentError(
                 f"{self.name}: {name} is not tangent at the given point (tolerance {tol:g})"
             )
@@ -121,17 +119,26 @@ class Connection(ABC):
     def _belongs_hint(self, point) -> str:
         return ""
 
-    def belongs(self, point, atol: float | None = None):
-        """Whether ``point`` lies on the manifold (default: right shape, finite)."""
-        arr = np.asarray(point, dtype=float)
+    def _finite_with_point_shape(self, arr):
+        """Per batch entry: trailing shape ``point_shape`` and finite entries."""
+        arr = np.asarray(arr, dtype=float)
         nd = len(self.point_shape)
         if arr.ndim < nd or arr.shape[arr.ndim - nd :] != tuple(self.point_shape):
             return False
         return np.isfinite(arr).all(axis=tuple(range(arr.ndim - nd, arr.ndim)))
 
+    def belongs(self, point, atol: float | None = None):
+        """Whether ``point`` lies on the manifold (default: right shape, finite)."""
+        return self._finite_with_point_shape(point)
+
     def is_tangent(self, point, vector, atol: float | None = None):
-        """Whether ``vector`` is tangent at ``point`` (default: right shape, finite)."""
-        return self.belongs(vector)
+        """Whether ``vector`` is tangent at ``point`` (default: right shape, finite).
+
+        The default never asks :meth:`belongs` about the vector: on an open subset
+        of ``R^n`` (e.g. the half-plane) every finite vector is tangent, also one
+        that points out of the subset.
+        """
+        return self._finite_with_point_shape(vector)
 
     # ------------------------------------------------------------------ derived
     def geodesic(self, a, b) -> Callable[[float | np.ndarray], np.ndarray]:
@@ -200,16 +207,5 @@ class Connection(ABC):
         )
 
     # ------------------------------------------------------------------ helpers
-    def batch_shape(self, point) -> tuple[int, ...]:
-        """Leading (batch) axes of an array of points."""
-        arr = np.asarray(point)
-        nd = len(self.point_shape)
-        if arr.ndim < nd:
-            raise ManifoldError(
-                f"{self.name}: expected an array with trailing shape {self.point_shape}, "
-                f"got shape {arr.shape}"
-            )
-        return arr.shape[: arr.ndim - nd]
-
     def __repr__(self) -> str:
         return f"{self.name}(point_shape={self.point_shape})"

@@ -75,10 +75,6 @@ class ResidualTangent:
             return NotImplemented
         return ResidualTangent(self.tangent / scalar, self.residual / scalar)
 
-    def norm(self) -> float:
-        """Euclidean norm of both components stacked (for diagnostics)."""
-        return float(np.sqrt(np.sum(self.tangent**2) + np.sum(self.residual**2)))
-
 
 class ResidualAugmented(Connection):
     """A space whose points carry the residual of an inexact ``log`` (paper, Section 2.3).
@@ -162,6 +158,16 @@ class ResidualAugmented(Connection):
 
     def belongs(self, point, atol: float | None = None):
         return self.base.belongs(point, atol)
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``vector`` is a :class:`ResidualTangent` (or a bare tangent of the
+        wrapped space) whose tangent part is tangent there and whose residual is a
+        finite displacement of shape ``point_shape``."""
+        if not isinstance(vector, ResidualTangent):
+            return self.base.is_tangent(point, vector, atol)
+        residual = np.asarray(vector.residual, dtype=float)
+        residual_ok = residual.shape == self.point_shape and bool(np.isfinite(residual).all())
+        return residual_ok and bool(np.all(self.base.is_tangent(point, vector.tangent, atol)))
 
     def inner(self, point, u, v):
         """Product metric: the wrapped space's inner product plus the Euclidean one on residuals."""

@@ -1,8 +1,20 @@
 """Generic contract that every space of :mod:`manifolds` must satisfy.
 
-A space's test file subclasses :class:`ConnectionContract` and sets ``space``
-(and, where needed, tolerances or sampling sizes). Properties are checked over
-random points drawn through hypothesis-chosen seeds.
+Shipped with the library so that a user adding a space can test it (needs the
+``test`` extra: pytest and hypothesis)::
+
+    from manifolds.testing import ConnectionContract
+
+    class TestMySpace(ConnectionContract):
+        space = MySpace(...)
+
+pytest then checks round trips of ``exp`` and ``log``, that ``exp`` lands on the
+manifold and ``log`` returns a tangent, the symmetry (fixes its centre, is an
+involution, reverses ``log``), the midpoint, the geodesic, the metric (when the
+space is Riemannian), batching (when it broadcasts), bad-input errors, and,
+for a space claiming ``is_symmetric``, an exact one-rung pole ladder and zero
+transvectivity. Tolerances, sampling sizes and how tangents are compared
+(``tangent_arrays``, ``corrupt_tangent``) are class attributes and hooks to set.
 """
 
 from __future__ import annotations
@@ -43,6 +55,7 @@ class ConnectionContract:
     tangent_scale = 0.5
     max_examples = 25
     n_batch = 5
+    membership_atol = 1e-8
 
     # ------------------------------------------------------------- helpers
     def given_seed(self, check):
@@ -65,7 +78,18 @@ class ConnectionContract:
         np.testing.assert_allclose(x, y, rtol=self.rtol, atol=self.atol)
 
     def assert_tangents_close(self, u, v):
-        np.testing.assert_allclose(u, v, rtol=self.rtol, atol=self.atol)
+        for x, y in zip(self.tangent_arrays(u), self.tangent_arrays(v), strict=True):
+            np.testing.assert_allclose(x, y, rtol=self.rtol, atol=self.atol)
+
+    def tangent_arrays(self, v) -> list:
+        """The arrays that make up a tangent vector (one array by default)."""
+        return [np.asarray(v, dtype=float)]
+
+    def corrupt_tangent(self, v):
+        """A copy of the tangent ``v`` with a NaN entry (for the bad-input check)."""
+        bad = np.array(v, dtype=float, copy=True)
+        bad.flat[0] = np.nan
+        return bad
 
     # ------------------------------------------------------------- contract
     def test_point_shape(self):
@@ -91,8 +115,60 @@ class ConnectionContract:
     def test_log_at_self_is_zero(self):
         def check(rng):
             a = self.space.random_point(rng)
-            v = self.space.log(a, a)
-            np.testing.assert_allclose(v, np.zeros_like(v), atol=self.atol)
+            for arr in self.tangent_arrays(self.space.log(a, a)):
+                np.testing.assert_allclose(arr, np.zeros_like(arr), atol=self.atol)
+
+        self.given_seed(check)
+
+    def test_exp_lands_on_manifold(self):
+        def check(rng):
+            a = self.space.random_point(rng)
+            v = self.space.random_tangent(a, rng, scale=self.tangent_scale)
+            assert np.all(self.space.belongs(self.space.exp(a, v), atol=self.membership_atol))
+
+        self.given_seed(check)
+
+    def test_log_returns_a_tangent(self):
+        def check(rng):
+            a, b, _ = self.pair(rng)
+            v = self.space.log(a, b)
+            assert np.all(self.space.is_tangent(a, v, atol=self.membership_atol))
+
+        self.given_seed(check)
+
+    def triple(self, rng):
+        """``(T, S, S')``: a template, a shape near it and a shape near the shape."""
+        t = self.space.random_point(rng)
+        s = self.space.exp(t, self.space.random_tangent(t, rng, scale=self.tangent_scale))
+        s2 = self.space.exp(s, self.space.random_tangent(s, rng, scale=self.tangent_scale))
+        return t, s, s2
+
+    def test_symmetric_space_has_exact_one_rung_pole_ladder(self):
+        if not self.space.is_symmetric:
+            pytest.skip("space does not claim to be symmetric")
+
+        def check(rng):
+            t, s, s2 = self.triple(rng)
+            m = self.space.midpoint(t, s)
+            ladder = self.space.log(t, self.space.transvection(t, m)(s2))  # Algorithm 1
+            try:
+                exact = self.space.parallel_transport(s, t, self.space.log(s, s2))
+            except NotImplementedError:
+                pytest.skip("no exact parallel transport to compare with")
+            self.assert_tangents_close(ladder, exact)
+
+        self.given_seed(check)
+
+    def test_symmetric_space_has_zero_transvectivity(self):
+        if not self.space.is_symmetric:
+            pytest.skip("space does not claim to be symmetric")
+
+        def check(rng):
+            t, s, s2 = self.triple(rng)
+            m = self.space.midpoint(t, s)
+            self.assert_points_close(
+                self.space.transvection(t, m)(s2), self.space.transvection(m, s)(s2)
+            )
 
         self.given_seed(check)
 
@@ -206,10 +282,8 @@ class ConnectionContract:
         bad.flat[0] = np.nan
         with pytest.raises(ManifoldError, match="other"):
             self.space.log(a, bad)
-        bad_v = np.array(v, dtype=float, copy=True)
-        bad_v.flat[0] = np.nan
         with pytest.raises(ManifoldError, match="tangent"):
-            self.space.exp(a, bad_v)
+            self.space.exp(a, self.corrupt_tangent(v))
 
     def test_wrong_shape_raises(self):
         rng = np.random.default_rng(4)

@@ -35,9 +35,27 @@ def test_sphinx_builds_api_reference(tmp_path):
         assert (tmp_path / f"{page}.html").exists(), page
 
 
-def test_readme_usage_example_runs():
-    text = (ROOT / "README.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
-    assert blocks, "README has no python example"
-    namespace: dict = {}
-    exec(compile(blocks[0], "README.md", "exec"), namespace)
+DOC_PAGES = sorted(
+    p.relative_to(ROOT).as_posix() for p in [ROOT / "README.md", *ROOT.glob("docs/*.md")]
+)
+
+
+def python_blocks(path: Path) -> list[str]:
+    """The fenced ```python blocks of a Markdown file, in order."""
+    return re.findall(r"^```python\n(.*?)^```", path.read_text(), flags=re.S | re.M)
+
+
+def test_readme_has_a_usage_example():
+    assert python_blocks(ROOT / "README.md"), "README has no python example"
+
+
+@pytest.mark.parametrize("page", DOC_PAGES)
+def test_python_snippets_run(page, tmp_path, monkeypatch):
+    """Every ```python block of the page runs, in order, in one namespace (from a scratch folder)."""
+    blocks = python_blocks(ROOT / page)
+    if not blocks:
+        pytest.skip(f"{page} has no python snippet")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {"__name__": f"snippets_of_{Path(page).stem}"}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"{page} (python block {i + 1})", "exec"), namespace)

@@ -133,3 +133,18 @@ def test_domain_and_shooting_failures():
     impatient = PoincareHalfPlane(shooting=ShootingSolver(max_iterations=1))
     with pytest.raises(ConvergenceError, match="did not converge"):
         impatient.log(p, np.array([3.0, 0.2]))
+
+
+def test_default_is_tangent_accepts_vectors_pointing_out_of_the_half_plane():
+    space = PoincareHalfPlane()
+    point = np.array([0.0, 1.0])
+    # Every finite vector is tangent to an open subset of R^2, also (0, -1) and (0, -5).
+    for vector in ([0.0, -1.0], [0.0, -5.0], [3.0, 0.0]):
+        assert space.is_tangent(point, vector)
+        np.testing.assert_array_equal(space.check_tangent(point, vector), vector)
+    assert not space.is_tangent(point, [np.nan, 0.0])
+    assert not space.is_tangent(point, [1.0, 0.0, 0.0])
+    # The point itself must still lie in the half-plane.
+    assert not space.belongs([0.0, -1.0])
+    # exp accepts a downward tangent and stays in the half-plane.
+    assert space.belongs(space.exp(point, np.array([0.0, -1.0])))

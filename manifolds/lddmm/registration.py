@@ -209,17 +209,32 @@ def register(
 
     opt = minimize_lbfgsb(fun_and_grad, z0, options)
     mu = pre.to_momenta(opt.x.reshape(n_cp, dim))
-    value, _, deformed, rkhs_sq = evaluate(opt.x)
+    result = _result(target, cp, mu, evaluate(opt.x), opt, scale)
+    if warn and not result.converged:
+        warnings.warn(
+            ConvergenceWarning(
+                f"LDDMM registration did not converge after {opt.n_iter} iterations "
+                f"({opt.message}); objective {result.objective:.6g}, "
+                f"RMS residual {result.rms_error:.3g}"
+            ),
+            stacklevel=2,
+        )
+    return result
+
+
+def _result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:
+    """Assemble a :class:`RegistrationResult` from the final evaluation and the optimiser's run."""
+    value, _, deformed, rkhs_sq = evaluation
     resid = target - deformed
     err = float(np.sqrt((resid * resid).sum()))
-    result = RegistrationResult(
-        momenta=mu,
-        control_points=cp.copy(),
+    return RegistrationResult(
+        momenta=momenta,
+        control_points=control_points.copy(),
         deformed=deformed,
         residual=resid,
         objective=value,
         registration_error=err,
-        rms_error=err / np.sqrt(template.shape[0]),
+        rms_error=err / np.sqrt(target.shape[0]),
         rkhs_norm=float(np.sqrt(max(rkhs_sq, 0.0))),
         n_iter=opt.n_iter,
         n_evals=opt.n_evals,
@@ -227,12 +242,3 @@ def register(
         converged=opt.converged,
         message=opt.message,
     )
-    if warn and not result.converged:
-        warnings.warn(
-            ConvergenceWarning(
-                f"LDDMM registration did not converge after {opt.n_iter} iterations "
-                f"({opt.message}); objective {value:.6g}, RMS residual {result.rms_error:.3g}"
-            ),
-            stacklevel=2,
-        )
-    return result

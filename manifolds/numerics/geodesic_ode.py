@@ -176,30 +176,26 @@ class GeodesicIntegrator:
         i_j = i_tr + m * n
         i_k = i_j + n * n
 
-        def rhs(t, y):
-            x = y[:n]
-            v = y[n : 2 * n]
-            if not np.isfinite(x).all() or (domain is not None and not domain(x)):
-                raise _LeftDomain(t, x)
-            if variational:
-                gam, dgam = christoffel_jet(x)
-            else:
-                gam = christoffel(x)
-            gv = gam @ v  # [k, i] = Gamma^k_ij v^j (= Gamma^k_ji v^j by symmetry)
-            out = np.empty_like(y)
-            out[:n] = v
-            out[n : 2 * n] = -(gv @ v)
-            if m:
-                w = y[i_tr:i_j].reshape(m, n)
-                out[i_tr:i_j] = -(w @ gv.T).ravel()
-            if variational:
-                jac = y[i_j:i_k].reshape(n, n)
-                kac = y[i_k:].reshape(n, n)
-                hess = np.einsum("kijl,i,j->kl", dgam, v, v)
-                out[i_j:i_k] = kac.ravel()
-                out[i_k:] = (-(hess @ jac) - 2.0 * (gv @ kac)).ravel()
-            return out
+        rhs = _geodesic_rhs(n, m, christoffel, christoffel_jet, domain)
+        sol = self._solve(rhs, y0, t_final, point, velocity)
+        ys = sol.y
+        if not np.isfinite(ys).all():
+            raise GeodesicDomainError(
+                f"geodesic from {point.tolist()} with velocity {velocity.tolist()} "
+                "became non-finite",
+                time=float("nan"),
+            )
+        y1 = ys[:, -1]
+        return GeodesicSolution(
+            position=y1[:n].copy(),
+            velocity=y1[n : 2 * n].copy(),
+            transported=y1[i_tr:i_j].reshape(m, n).copy() if m else None,
+            jacobian=y1[i_j:i_k].reshape(n, n).copy() if variational else None,
+            n_steps=len(sol.t) - 1,
+        )
 
+    def _solve(self, rhs, y0, t_final, point, velocity):
+        """``solve_ivp`` on ``[0, t_final]``, its failures turned into named errors."""
         try:
             sol = solve_ivp(
                 rhs,
@@ -228,18 +224,42 @@ class GeodesicIntegrator:
                 f"geodesic integration from {point.tolist()} with velocity "
                 f"{velocity.tolist()} failed: {sol.message}"
             )
-        ys = sol.y
-        if not np.isfinite(ys).all():
-            raise GeodesicDomainError(
-                f"geodesic from {point.tolist()} with velocity {velocity.tolist()} "
-                "became non-finite",
-                time=float("nan"),
-            )
-        y1 = ys[:, -1]
-        return GeodesicSolution(
-            position=y1[:n].copy(),
-            velocity=y1[n : 2 * n].copy(),
-            transported=y1[i_tr:i_j].reshape(m, n).copy() if m else None,
-            jacobian=y1[i_j:i_k].reshape(n, n).copy() if variational else None,
-            n_steps=len(sol.t) - 1,
-        )
+        return sol
+
+
+def _geodesic_rhs(n, m, christoffel, christoffel_jet, domain):
+    """Right-hand side of the geodesic, transport and variational equations.
+
+    The state is ``[x, v, w_1..w_m, J, dJ/dt]``: position, velocity, ``m``
+    transported vectors and, when ``christoffel_jet`` is given, the Jacobian
+    ``J = dx/dv_0`` and its derivative (flattened).
+    """
+    variational = christoffel_jet is not None
+    i_tr, i_j = 2 * n, 2 * n + m * n
+    i_k = i_j + n * n
+
+    def rhs(t, y):
+        x = y[:n]
+        v = y[n : 2 * n]
+        if not np.isfinite(x).all() or (domain is not None and not domain(x)):
+            raise _LeftDomain(t, x)
+        if variational:
+            gam, dgam = christoffel_jet(x)
+        else:
+            gam = christoffel(x)
+        gv = gam @ v  # [k, i] = Gamma^k_ij v^j (= Gamma^k_ji v^j by symmetry)
+        out = np.empty_like(y)
+        out[:n] = v
+        out[n : 2 * n] = -(gv @ v)
+        if m:
+            w = y[i_tr:i_j].reshape(m, n)
+            out[i_tr:i_j] = -(w @ gv.T).ravel()
+        if variational:
+            jac = y[i_j:i_k].reshape(n, n)
+            kac = y[i_k:].reshape(n, n)
+            hess = np.einsum("kijl,i,j->kl", dgam, v, v)
+            out[i_j:i_k] = kac.ravel()
+            out[i_k:] = (-(hess @ jac) - 2.0 * (gv @ kac)).ravel()
+        return out
+
+    return rhs

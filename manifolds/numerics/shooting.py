@@ -109,24 +109,9 @@ class ShootingSolver:
         threshold = self.tol * (1.0 + float(np.linalg.norm(target)))
         where = f"from {point.tolist()} to {target.tolist()}"
 
-        # Initial guess: shrink it until the geodesic it shoots stays in the domain.
-        state = None
-        last_exit = None
-        for _ in range(self.max_halvings + 1):
-            try:
-                state = exp_with_jacobian(v)
-                break
-            except GeodesicDomainError as exc:
-                last_exit = exc
-                v = 0.5 * v
-        if state is None:
-            raise ConvergenceError(
-                f"shooting {where} failed: every initial guess leaves the domain ({last_exit})"
-            )
-        end, jac = state
+        v, (end, jac) = self._admissible_start(exp_with_jacobian, v, where)
         residual = end - target
         res_norm = float(np.linalg.norm(residual))
-
         slow = 0
         exits = 0
         for iteration in range(self.max_iterations + 1):
@@ -141,31 +126,18 @@ class ShootingSolver:
                     f"shooting {where} failed: singular differential of Exp at v = "
                     f"{v.tolist()} (conjugate point?), residual {res_norm:.3e}"
                 ) from None
-            step = 1.0
-            accepted = False
-            reason = "no decrease of the residual"
-            for _ in range(self.max_halvings + 1):
-                trial = v + step * delta
-                try:
-                    t_end, t_jac = exp_with_jacobian(trial)
-                except GeodesicDomainError as exc:
-                    reason = f"trial geodesics leave the domain ({exc})"
-                    exits += 1
-                    step *= 0.5
-                    continue
-                t_res = t_end - target
-                t_norm = float(np.linalg.norm(t_res))
-                if t_norm < res_norm or t_norm <= threshold:
-                    slow = slow + 1 if t_norm > 0.9 * res_norm else 0
-                    v, jac, residual, res_norm = trial, t_jac, t_res, t_norm
-                    accepted = True
-                    break
-                step *= 0.5
-            if not accepted:
+            step, n_exits = self._line_search(
+                exp_with_jacobian, v, delta, target, res_norm, threshold
+            )
+            exits += n_exits
+            if not isinstance(step, tuple):
                 raise ConvergenceError(
                     f"shooting {where} stalled at residual {res_norm:.3e} "
-                    f"(tolerance {threshold:.1e}): {reason}"
+                    f"(tolerance {threshold:.1e}): {step}"
                 )
+            t_norm = step[3]
+            slow = slow + 1 if t_norm > 0.9 * res_norm else 0
+            v, jac, residual, res_norm = step
             if slow >= self.max_slow_steps and res_norm > threshold:
                 raise ConvergenceError(
                     f"shooting {where} stalled at residual {res_norm:.3e} "
@@ -177,3 +149,45 @@ class ShootingSolver:
             f"shooting {where} did not converge in {self.max_iterations} Newton "
             f"iterations: residual {res_norm:.3e} > tolerance {threshold:.1e}"
         )
+
+    def _admissible_start(self, exp_with_jacobian: ExpJacobianFn, v: np.ndarray, where: str):
+        """Halve the initial guess until the geodesic it shoots stays in the domain.
+
+        Returns the guess and ``exp_with_jacobian`` of it.
+        """
+        last_exit = None
+        for _ in range(self.max_halvings + 1):
+            try:
+                return v, exp_with_jacobian(v)
+            except GeodesicDomainError as exc:
+                last_exit = exc
+                v = 0.5 * v
+        raise ConvergenceError(
+            f"shooting {where} failed: every initial guess leaves the domain ({last_exit})"
+        )
+
+    def _line_search(self, exp_with_jacobian, v, delta, target, res_norm, threshold):
+        """Backtracking along the Newton step ``delta``.
+
+        Returns ``((v, jac, residual, res_norm), n_exits)`` for the first step that
+        decreases the residual, or ``(reason, n_exits)`` when every halving failed;
+        ``n_exits`` counts trial geodesics that left the domain.
+        """
+        step = 1.0
+        exits = 0
+        reason = "no decrease of the residual"
+        for _ in range(self.max_halvings + 1):
+            trial = v + step * delta
+            try:
+                t_end, t_jac = exp_with_jacobian(trial)
+            except GeodesicDomainError as exc:
+                reason = f"trial geodesics leave the domain ({exc})"
+                exits += 1
+                step *= 0.5
+                continue
+            t_res = t_end - target
+            t_norm = float(np.linalg.norm(t_res))
+            if t_norm < res_norm or t_norm <= threshold:
+                return (trial, t_jac, t_res, t_norm), exits
+            step *= 0.5
+        return reason, exits
