@@ -15,6 +15,7 @@ from .analytic_validation import ValidationReport, run_validation
 from .area_strain import area_strain, area_strain_error, cell_areas
 from .benchmark_shapes import bent_ellipsoid
 from .cohort import Cohort, CohortError, MeshFolderError, Subject
+from .cohort_statistics import CohortStatistics, cohort_statistics
 from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
 from .pipeline import ERROR_NAMES, VARIANTS, StudyConfig, run_subject
 from .report import summarize, summary_markdown, write_report
@@ -27,6 +28,8 @@ __all__ = [
     "CohortError",
     "MeshFolderError",
     "Subject",
+    "CohortStatistics",
+    "cohort_statistics",
     "SubjectParameters",
     "SyntheticLVModel",
     "make_synthetic_cohort",
