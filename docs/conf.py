@@ -1,5 +1,6 @@
 """Sphinx configuration: Markdown pages (MyST) and an API reference from numpydoc docstrings."""
 
+import importlib.util
 import os
 import sys
 
@@ -21,5 +22,7 @@ numpydoc_validation_checks = set()
 autosummary_generate = True
 autodoc_default_options = {"members": True, "inherited-members": False, "show-inheritance": True}
 exclude_patterns = ["_build"]
+# The geomstats adapter is documented even when the optional extra is not installed.
+autodoc_mock_imports = [] if importlib.util.find_spec("geomstats") else ["geomstats"]
 html_theme = "alabaster"
 suppress_warnings = ["myst.header"]

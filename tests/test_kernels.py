@@ -113,7 +113,6 @@ def test_invalid_parameters_raise():
         GaussianKernel(1.0, block_size=0)
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed")
 @pytest.mark.parametrize("dim", [2, 3])
 def test_compiled_backend_agrees_with_numpy(dim):
     from manifolds.lddmm import kernels_numba
@@ -133,3 +132,9 @@ def test_compiled_backend_agrees_with_numpy(dim):
     fast = all_sums(GaussianKernel(SIGMA, backend="numba"), x, c, mom, cot)
     for a, b in zip(fast, ref):
         np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11 * np.abs(b).max())
+
+
+def test_compiled_backend_is_the_default():
+    """numba is a dependency: the default kernel runs the compiled sums."""
+    assert numba_available()
+    assert GaussianKernel(SIGMA).backend == "numba"

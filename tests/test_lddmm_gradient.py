@@ -12,7 +12,7 @@ import pytest
 from autograd import grad
 
 from manifolds.lddmm.control_points import grid_control_points
-from manifolds.lddmm.kernels import GaussianKernel, numba_available
+from manifolds.lddmm.kernels import GaussianKernel
 from manifolds.lddmm.registration import registration_objective
 from manifolds.numerics.integrators import RK2, RK4, Euler
 
@@ -117,7 +117,6 @@ def test_blockwise_gradient_equals_single_block():
     np.testing.assert_allclose(out_tiny[1], out_full[1], rtol=1e-11, atol=1e-13)
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed")
 @pytest.mark.parametrize("dense", [True, False])
 def test_compiled_backend_gradient_agrees(dense):
     template, target, cp, mu = make_problem(2, 30, dense, seed=9)

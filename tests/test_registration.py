@@ -79,7 +79,6 @@ def test_inverse_consistency_is_small_for_a_nearby_pair():
     assert loose.inverse_consistency(template, target) > err
 
 
-@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
 def test_compiled_and_numpy_registrations_agree():
     template, target, _ = exact_pair(
         LDDMMLandmarks(30, 3, sigma=0.5, alpha=0.05, backend="numpy"), seed=4
@@ -126,7 +125,6 @@ def test_longer_lbfgs_memory_lowers_the_objective_within_a_fixed_budget():
     assert values[2] < values[1] < values[0]
 
 
-@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
 def test_compiled_triangular_solve_matches_scipy():
     import scipy.linalg
 
@@ -143,7 +141,6 @@ def test_compiled_triangular_solve_matches_scipy():
         solve_lower(chol, rhs[:5])
 
 
-@pytest.mark.skipif(importlib.util.find_spec("numba") is None, reason="numba not installed")
 def test_parallel_kernel_path_matches_numpy_and_registration_is_thread_independent(
     monkeypatch,
 ):

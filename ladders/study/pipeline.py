@@ -59,7 +59,7 @@ class StudyConfig:
     fanning_steps : int
         Steps of the fanning scheme.
     kernel_backend : str
-        ``"auto"`` (numba when installed), ``"numpy"`` or ``"numba"``.
+        ``"auto"`` (numba when it imports), ``"numpy"`` or ``"numba"``.
     """
 
     alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)

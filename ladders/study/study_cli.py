@@ -80,7 +80,7 @@ def add_study_parser(sub) -> None:
         "--kernel-backend",
         choices=("auto", "numpy", "numba"),
         default="auto",
-        help="kernel sums: numba (extra 'fast') when installed, else numpy",
+        help="kernel sums: 'auto' uses numba when it imports, else numpy (the reference)",
     )
     p.add_argument("--jobs", "-j", type=int, default=-1, help="parallel workers (-1: all cores)")
     p.add_argument(

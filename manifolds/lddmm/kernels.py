@@ -11,7 +11,7 @@ Hamiltonian shooting and its adjoint are
 * :meth:`GaussianKernel.convolve_vjp` and :meth:`GaussianKernel.hamiltonian_vjp`,
   their vector-Jacobian products (the building blocks of the adjoint pass).
 
-An optional compiled backend (:mod:`manifolds.lddmm.kernels_numba`, needs ``numba``)
+A compiled backend (:mod:`manifolds.lddmm.kernels_numba`; ``numba`` is a dependency)
 computes the same sums with fused loops and no ``k x n`` temporaries; the
 numpy code here is the reference it is tested against.
 """
@@ -51,7 +51,8 @@ class GaussianKernel:
     sigma : float
         Kernel width (same unit as the points).
     backend : {"auto", "numpy", "numba"}, default "auto"
-        ``"auto"`` uses the compiled backend when ``numba`` is installed.
+        ``"auto"`` uses the compiled backend when ``numba`` imports (it is a
+        dependency; the numpy backend remains as the reference and the fallback).
     block_size : int, optional
         Maximum number of kernel-matrix entries per block of the numpy backend.
     """
