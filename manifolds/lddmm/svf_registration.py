@@ -129,23 +129,8 @@ def register_svf(
 
     opt = minimize_lbfgsb(fun_and_grad, z0, options)
     value, _, deformed, norm_sq = evaluate(opt.x)
-    resid = target - deformed
-    err = float(np.sqrt((resid * resid).sum()))
-    result = RegistrationResult(
-        momenta=pre.to_momenta(opt.x.reshape(n_cp, dim)),
-        control_points=cp.copy(),
-        deformed=deformed,
-        residual=resid,
-        objective=value,
-        registration_error=err,
-        rms_error=err / np.sqrt(template.shape[0]),
-        rkhs_norm=float(np.sqrt(max(norm_sq, 0.0))),
-        n_iter=opt.n_iter,
-        n_evals=opt.n_evals,
-        history=[h * scale for h in opt.history],
-        converged=opt.converged,
-        message=opt.message,
-    )
+    momenta = pre.to_momenta(opt.x.reshape(n_cp, dim))
+    result = _result(opt, momenta, cp, target, deformed, value, norm_sq, scale)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
@@ -155,3 +140,24 @@ def register_svf(
             stacklevel=2,
         )
     return result
+
+
+def _result(opt, momenta, cp, target, deformed, value, norm_sq, scale) -> RegistrationResult:
+    """The :class:`RegistrationResult` of a finished optimisation."""
+    resid = target - deformed
+    err = float(np.sqrt((resid * resid).sum()))
+    return RegistrationResult(
+        momenta=momenta,
+        control_points=cp.copy(),
+        deformed=deformed,
+        residual=resid,
+        objective=value,
+        registration_error=err,
+        rms_error=err / np.sqrt(target.shape[0]),
+        rkhs_norm=float(np.sqrt(max(norm_sq, 0.0))),
+        n_iter=opt.n_iter,
+        n_evals=opt.n_evals,
+        history=[h * scale for h in opt.history],
+        converged=opt.converged,
+        message=opt.message,
+    )
