@@ -5,7 +5,7 @@ geodesic, midpoint, geodesic symmetry and transvection from ``exp`` and ``log``.
 Concrete spaces: :class:`Euclidean`, the closed-form symmetric spaces
 (:class:`Hypersphere`, :class:`Hyperbolic`, :class:`SPDMatrices`), metric-matrix
 fields (:class:`MetricField`, :class:`PoincareHalfPlane`, :class:`WarpedSurface`),
-the LDDMM landmark space (subpackage :mod:`manifolds.lddmm`) and the
+the LDDMM and SVF landmark spaces (subpackage :mod:`manifolds.lddmm`) and the
 residual-augmented space :class:`ResidualAugmented`. Numerical methods live in
 :mod:`manifolds.numerics`; the contract tests for a new space in
 :mod:`manifolds.testing`.
@@ -23,7 +23,15 @@ from .errors import (
 from .euclidean import Euclidean
 from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
-from .lddmm import GaussianKernel, LDDMMLandmarks, RegistrationResult, register
+from .lddmm import (
+    GaussianKernel,
+    LDDMMLandmarks,
+    RegistrationResult,
+    StationaryFlow,
+    SVFLandmarks,
+    register,
+    register_svf,
+)
 from .metric_field import MetricField
 from .poincare_half_plane import PoincareHalfPlane
 from .residual import ResidualAugmented, ResidualTangent
@@ -46,6 +54,9 @@ __all__ = [
     "LDDMMLandmarks",
     "RegistrationResult",
     "register",
+    "SVFLandmarks",
+    "StationaryFlow",
+    "register_svf",
     "ResidualAugmented",
     "ResidualTangent",
     "ConvergenceError",

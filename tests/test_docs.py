@@ -31,7 +31,7 @@ def test_sphinx_builds_api_reference(tmp_path):
     ):
         assert name in api
     assert "import failed" not in proc.stderr.lower(), proc.stderr[-3000:]
-    for page in ("index", "add_your_own_space", "lddmm", "study", "cohort", "validation"):
+    for page in ("index", "add_your_own_space", "lddmm", "svf", "study", "cohort", "validation"):
         assert (tmp_path / f"{page}.html").exists(), page
 
 

@@ -24,7 +24,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from manifolds.errors import ConvergenceWarning
-from manifolds.lddmm import LDDMMLandmarks
+from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks, group_pole_ladder
 from manifolds.residual import ResidualAugmented
 
 from ..fanning import fanning_transport
@@ -60,6 +60,11 @@ class StudyConfig:
         Steps of the fanning scheme.
     kernel_backend : str
         ``"auto"`` (numba when it imports), ``"numpy"`` or ``"numba"``.
+    deformation : str
+        ``"lddmm"`` (:class:`~manifolds.lddmm.LDDMMLandmarks`) or ``"svf"``
+        (:class:`~manifolds.lddmm.SVFLandmarks`). The fanning scheme integrates
+        LDDMM geodesics; with ``"svf"`` its slot of the results holds the SVF
+        pole ladder by conjugation, ``exp(-v/2) o exp(u) o exp(v/2)`` (``docs/svf.md``).
     """
 
     alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
@@ -70,17 +75,25 @@ class StudyConfig:
     max_iter: int = 100
     fanning_steps: int = 10
     kernel_backend: str = "auto"
+    deformation: str = "lddmm"
 
     def as_dict(self) -> dict:
         d = asdict(self)
         d["alpha2"] = [float(a) for a in self.alpha2]
+        if d["deformation"] == "lddmm":  # the default: results hashed before it existed stay valid
+            del d["deformation"]
         return d
 
 
-def make_space(config: StudyConfig, template: np.ndarray, alpha2: float) -> LDDMMLandmarks:
-    """The LDDMM space of a study at one ``alpha^2``."""
+def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
+    """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``."""
+    spaces = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
+    if config.deformation not in spaces:
+        raise ValueError(
+            f"StudyConfig.deformation: expected 'lddmm' or 'svf', got {config.deformation!r}"
+        )
     k, d = template.shape
-    return LDDMMLandmarks(
+    return spaces[config.deformation](
         n_landmarks=k,
         dim=d,
         sigma=config.sigma,
@@ -113,9 +126,11 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         las[variant] = area_strain(t, t_prime, faces)
         out[variant] = {name: float(getattr(errs, name)) for name in ERROR_NAMES}
         out[variant]["ase"] = area_strain_error(las_subject, las[variant])
-    # Fanning: transport Log_S(S') along the geodesic S -> T, then shoot the atlas.
-    fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
-    t_fan = space.shoot(t, fan.momenta, control_points=fan.control_points)
+    if config.deformation == "svf":  # SVF pole ladder: conjugation of exp(u) by exp(v/2)
+        t_fan = group_pole_ladder(space, t, space.log(t, s), space.log(s, s2))
+    else:  # Fanning: transport Log_S(S') along the geodesic S -> T, then shoot the atlas.
+        fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
+        t_fan = space.shoot(t, fan.momenta, control_points=fan.control_points)
     las["fanning"] = area_strain(t, t_fan, faces)
     out["fanning"] = {"ase": area_strain_error(las_subject, las["fanning"])}
     out["las"] = {key: np.asarray(v).tolist() for key, v in las.items()}

@@ -77,6 +77,12 @@ def add_study_parser(sub) -> None:
     p.add_argument("--max-iter", type=int, default=100, help="L-BFGS-B iterations per registration")
     p.add_argument("--fanning-steps", type=int, default=10, help="steps of the fanning scheme")
     p.add_argument(
+        "--deformation",
+        choices=("lddmm", "svf"),
+        default="lddmm",
+        help="deformation model: LDDMM geodesics or stationary velocity fields (docs/svf.md)",
+    )
+    p.add_argument(
         "--kernel-backend",
         choices=("auto", "numpy", "numba"),
         default="auto",
@@ -162,6 +168,7 @@ def run_study_command(args) -> int:
         max_iter=args.max_iter,
         fanning_steps=args.fanning_steps,
         kernel_backend=args.kernel_backend,
+        deformation=args.deformation,
     )
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "

@@ -8,7 +8,12 @@
 - :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
   (numpy reference or the compiled :mod:`.kernels_numba`);
 - :mod:`.control_points`: control-point policies (dense, grid, auto);
-- :mod:`.shapes`: smooth random shapes (the space's ``random_point``).
+- :mod:`.shapes`: smooth random shapes (the space's ``random_point``);
+- :mod:`.svf_space`: :class:`SVFLandmarks`, the stationary-velocity-field landmark
+  space (``exp`` = flow of a stationary kernel field, ``log`` = SVF registration),
+  built on :mod:`.stationary_flow` (flows and their adjoint) and
+  :mod:`.svf_registration`; :mod:`.svf_group`: the group symmetry and the SVF
+  pole ladder on deformations given as flows.
 """
 
 from .control_points import POLICIES, grid_control_points, resolve_control_points
@@ -16,6 +21,24 @@ from .kernels import GaussianKernel, numba_available
 from .registration import RegistrationResult, register, registration_objective
 from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
+from .stationary_flow import (
+    FlowResult,
+    StationaryFlow,
+    integrate_stationary,
+    kernel_flow,
+    kernel_flow_vjp,
+    kernel_velocity,
+)
+from .svf_group import (
+    Composition,
+    compose,
+    conjugate,
+    group_pole_ladder,
+    group_symmetry,
+    svf_pole_ladder,
+)
+from .svf_registration import register_svf, svf_objective
+from .svf_space import SVFLandmarks
 
 __all__ = [
     "LDDMMLandmarks",
@@ -32,4 +55,19 @@ __all__ = [
     "POLICIES",
     "grid_control_points",
     "resolve_control_points",
+    "SVFLandmarks",
+    "StationaryFlow",
+    "FlowResult",
+    "kernel_velocity",
+    "integrate_stationary",
+    "kernel_flow",
+    "kernel_flow_vjp",
+    "register_svf",
+    "svf_objective",
+    "Composition",
+    "compose",
+    "conjugate",
+    "group_symmetry",
+    "svf_pole_ladder",
+    "group_pole_ladder",
 ]
