@@ -127,7 +127,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         out[variant] = {name: float(getattr(errs, name)) for name in ERROR_NAMES}
         out[variant]["ase"] = area_strain_error(las_subject, las[variant])
     if config.deformation == "svf":  # SVF pole ladder: conjugation of exp(u) by exp(v/2)
-        t_fan = group_pole_ladder(space, t, space.log(t, s), space.log(s, s2))
+        t_fan = group_pole_ladder(space, t, space.log(t, s), space.log(s, s2), base=s)
     else:  # Fanning: transport Log_S(S') along the geodesic S -> T, then shoot the atlas.
         fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
         t_fan = space.shoot(t, fan.momenta, control_points=fan.control_points)

@@ -106,7 +106,7 @@ def svf_pole_ladder(v: StationaryFlow, u: StationaryFlow) -> Composition:
     return conjugate(v.scaled(0.5), u)
 
 
-def group_pole_ladder(space, point, v, u, return_tangent: bool = False):
+def group_pole_ladder(space, point, v, u, return_tangent: bool = False, base=None):
     """SVF pole ladder on shapes of an :class:`~manifolds.lddmm.SVFLandmarks` space.
 
     With ``T = point``, ``S = Exp_T(v)`` and the tangent ``u`` at ``S``
@@ -126,6 +126,10 @@ def group_pole_ladder(space, point, v, u, return_tangent: bool = False):
         Momenta at ``c(S)``, the tangent to transport.
     return_tangent : bool, default False
         Also return ``Log_T(T')`` (one registration), the transported tangent at ``T``.
+    base : array, shape ``(k, d)``, optional
+        The shape ``S`` whose control points carry ``u`` (e.g. ``u = Log_S(S')``
+        from a registration, when ``Exp_T(v)`` only approximates ``S``). Defaults
+        to ``Exp_T(v)``.
 
     Returns
     -------
@@ -136,7 +140,8 @@ def group_pole_ladder(space, point, v, u, return_tangent: bool = False):
     point = space.check_point(point, "point")
     phi_v = space.deformation(point, v)
     start = phi_v(point)
-    phi_u = space.deformation(start, u)
+    carrier = start if base is None else space.check_point(base, "base")
+    phi_u = space.deformation(carrier, u)
     shape = svf_pole_ladder(phi_v, phi_u)(point)
     if return_tangent:
         return shape, space.log(point, shape)
