@@ -95,6 +95,11 @@ def add_study_parser(sub) -> None:
         help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--no-meshes",
+        action="store_true",
+        help="do not write the .vtu meshes (M, s_M(S'), T' and strain maps) under OUTPUT/meshes",
+    )
     p.set_defaults(run=run_study_command)
 
 
@@ -177,6 +182,7 @@ def run_study_command(args) -> int:
             jobs=args.jobs,
             progress=not args.no_progress,
             data_description=description,
+            meshes=not args.no_meshes,
         )
     if outcome.skipped:
         print(f"resumed: {len(outcome.skipped)} subject(s) already finished were skipped")
