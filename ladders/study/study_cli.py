@@ -45,12 +45,27 @@ def add_study_parser(sub) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--output", "-o", default="symladders-output/study", help="results folder")
-    p.add_argument(
+    source = p.add_mutually_exclusive_group()
+    source.add_argument(
         "--meshes",
         type=Path,
         default=None,
         help="folder of meshes (atlas.<ext>, <subject>_ed.<ext>, <subject>_es.<ext>; "
-        "PLY/OBJ/STL/OFF/VTK) instead of the built-in synthetic cohort",
+        "PLY/OBJ/STL/OFF/VTK/VTU/VTP) instead of the built-in synthetic cohort",
+    )
+    source.add_argument(
+        "--cohort",
+        type=Path,
+        default=None,
+        help="CSV table with the columns subject, ed, es (mesh paths relative to the table) "
+        "instead of the built-in synthetic cohort",
+    )
+    p.add_argument(
+        "--atlas",
+        type=Path,
+        default=None,
+        help="atlas mesh (with --meshes or --cohort); default: atlas.<ext> in the folder "
+        "or next to the table",
     )
     p.add_argument(
         "--subjects",
@@ -104,13 +119,22 @@ def add_study_parser(sub) -> None:
 
 
 def _load_cohort(args):
+    from .cohort_table import read_cohort_table
     from .mesh_io import read_cohort
     from .synthetic_lv import make_synthetic_cohort
 
     n = args.subjects
-    if args.meshes is not None:
-        cohort = read_cohort(args.meshes)
-        description = {"source": "folder", "folder": str(args.meshes.resolve())}
+    if args.atlas is not None and args.meshes is None and args.cohort is None:
+        raise SystemExit("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
+    if args.meshes is not None or args.cohort is not None:
+        if args.meshes is not None:
+            cohort = read_cohort(args.meshes, atlas=args.atlas)
+            description = {"source": "folder", "folder": str(args.meshes.resolve())}
+        else:
+            cohort = read_cohort_table(args.cohort, atlas=args.atlas)
+            description = {"source": "table", "table": str(args.cohort.resolve())}
+        if args.atlas is not None:
+            description["atlas"] = str(args.atlas.resolve())
         if n is not None:
             cohort = cohort.head(n)
     else:
