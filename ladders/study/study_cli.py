@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -120,19 +122,26 @@ def add_study_parser(sub) -> None:
 
 def _load_cohort(args):
     from .cohort_table import read_cohort_table
-    from .mesh_io import read_cohort
+    from .mesh_io import UnusedMeshFilesWarning, read_cohort
     from .synthetic_lv import make_synthetic_cohort
 
     n = args.subjects
     if args.atlas is not None and args.meshes is None and args.cohort is None:
         raise SystemExit("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
     if args.meshes is not None or args.cohort is not None:
-        if args.meshes is not None:
-            cohort = read_cohort(args.meshes, atlas=args.atlas)
-            description = {"source": "folder", "folder": str(args.meshes.resolve())}
-        else:
-            cohort = read_cohort_table(args.cohort, atlas=args.atlas)
-            description = {"source": "table", "table": str(args.cohort.resolve())}
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnusedMeshFilesWarning)
+            if args.meshes is not None:
+                cohort = read_cohort(args.meshes, atlas=args.atlas)
+                description = {"source": "folder", "folder": str(args.meshes.resolve())}
+            else:
+                cohort = read_cohort_table(args.cohort, atlas=args.atlas)
+                description = {"source": "table", "table": str(args.cohort.resolve())}
+        for w in caught:  # one readable line each, not a source location
+            if issubclass(w.category, UnusedMeshFilesWarning):
+                print(f"symladders study: warning: {w.message}", file=sys.stderr)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         if args.atlas is not None:
             description["atlas"] = str(args.atlas.resolve())
         if n is not None:

@@ -93,6 +93,8 @@ class _Arrays:
                 offset = int(element.get("offset", "0"))
                 block = self._raw_block(offset) if self.raw else self._appended_b64(offset)
                 return np.frombuffer(block, dtype=dtype)
+        except MeshFolderError:
+            raise
         except (ValueError, binascii.Error, zlib.error, lzma.LZMAError) as exc:
             self.fail(f"{label}: corrupt {fmt} data ({exc})")
         self.fail(f"{label}: unknown format {fmt!r} (expected ascii, binary or appended)")
