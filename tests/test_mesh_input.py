@@ -68,6 +68,22 @@ def test_meshio_written_files_keep_vertex_order(tmp_path, ext, kwargs):
     np.testing.assert_allclose(back.es, COHORT.es, rtol=0, atol=atol)
 
 
+@pytest.mark.parametrize("ext", [".vtk", ".vtu", ".vtp", ".ply", ".off", ".obj"])
+def test_duplicated_vertices_are_kept(tmp_path, ext):
+    """Coincident vertices stay distinct and in place (no reader merges them)."""
+    v = np.vstack([COHORT.atlas, COHORT.atlas[:2]])
+    f = COHORT.faces.copy()
+    f[0] = [len(v) - 2, len(v) - 1, f[0, 2]]  # the copies are used by a face
+    path = tmp_path / f"d{ext}"
+    if ext == ".vtp":
+        path.write_bytes(vtp_bytes(v, f, points_type="f8"))
+    else:
+        meshio.write(path, meshio.Mesh(v, [("triangle", f)]))
+    got_v, got_f = read_mesh(path)
+    np.testing.assert_allclose(got_v, v, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(got_f, f)
+
+
 def test_obj_with_texture_coordinates_and_normals(tmp_path):
     """meshio 5 fails on such OBJ files; trimesh reads them in the file's vertex order."""
     v, f = COHORT.atlas, COHORT.faces

@@ -101,3 +101,19 @@ def test_write_point_mesh_errors(tmp_path):
     with pytest.raises(MeshFolderError, match=r"point_data\['x'\]: expected 25 values"):
         write_point_mesh(tmp_path / "o.vtu", COHORT.atlas, COHORT.faces, {"x": np.zeros(3)})
     assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_no_meshes_then_resume_says_meshes_are_missing(tmp_path, capsys):
+    from ladders.study.cli import main
+
+    args = [
+        "study", "--subjects", "1", "--vertices", "25", "-o", str(tmp_path), "--alpha2", "1",
+        "--max-iter", "10", "--n-steps", "4", "--fanning-steps", "2", "--jobs", "1",
+        "--no-progress",
+    ]  # fmt: skip
+    assert main([*args, "--no-meshes"]) == 0
+    assert not (tmp_path / "meshes").exists()
+    capsys.readouterr()
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    assert "note: 1 skipped subject(s) have no mesh files" in out

@@ -219,6 +219,12 @@ def run_study_command(args) -> int:
         )
     if outcome.skipped:
         print(f"resumed: {len(outcome.skipped)} subject(s) already finished were skipped")
+        bare = [n for n in outcome.skipped if not (Path(args.output) / "meshes" / n).is_dir()]
+        if bare and not args.no_meshes:
+            print(
+                f"note: {len(bare)} skipped subject(s) have no mesh files (computed with "
+                "--no-meshes); delete their subjects/<name>.json to compute them with meshes"
+            )
     paths = write_report(
         outcome.results, args.output, cohort.atlas, cohort.faces, cohort.subjects[0].ed
     )
