@@ -2,7 +2,9 @@
 
 - cohorts: :class:`Cohort`, the synthetic left-ventricle model
   (:func:`make_synthetic_cohort`) and mesh folders (:func:`read_cohort`);
-- mesh I/O (:func:`read_mesh`, :func:`write_mesh`, legacy VTK);
+- mesh I/O (:func:`read_mesh`, :func:`write_mesh`, legacy VTK, VTK XML PolyData),
+  cohort tables (:func:`read_cohort_table`) and the study's mesh outputs
+  (:func:`write_subject_meshes`);
 - local area strain (:func:`area_strain`, :func:`area_strain_error`);
 - the study: per-subject pipeline (:func:`run_subject`), the runner with its
   resumable store (:func:`run_study`), the report (:func:`summarize`,
@@ -16,12 +18,22 @@ from .area_strain import area_strain, area_strain_error, cell_areas
 from .benchmark_shapes import bent_ellipsoid
 from .cohort import Cohort, CohortError, MeshFolderError, Subject
 from .cohort_statistics import CohortStatistics, cohort_statistics
-from .mesh_io import MESH_EXTENSIONS, read_cohort, read_mesh, write_cohort, write_mesh
+from .cohort_table import read_cohort_table
+from .mesh_io import (
+    MESH_EXTENSIONS,
+    UnusedMeshFilesWarning,
+    read_cohort,
+    read_mesh,
+    write_cohort,
+    write_mesh,
+)
+from .mesh_outputs import write_point_mesh, write_subject_meshes
 from .pipeline import ERROR_NAMES, VARIANTS, StudyConfig, run_subject
 from .report import summarize, summary_markdown, write_report
 from .runner import run_study
 from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
 from .vtk_io import read_vtk, write_vtk
+from .vtk_xml import read_vtp
 
 __all__ = [
     "Cohort",
@@ -35,10 +47,15 @@ __all__ = [
     "make_synthetic_cohort",
     "MESH_EXTENSIONS",
     "read_cohort",
+    "read_cohort_table",
+    "UnusedMeshFilesWarning",
     "read_mesh",
     "write_cohort",
     "write_mesh",
     "read_vtk",
+    "read_vtp",
+    "write_point_mesh",
+    "write_subject_meshes",
     "write_vtk",
     "area_strain",
     "area_strain_error",

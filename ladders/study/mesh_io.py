@@ -1,4 +1,4 @@
-"""Read and write cohorts of corresponding triangle meshes (PLY, OBJ, STL, OFF, legacy VTK).
+"""Read and write cohorts of corresponding triangle meshes (PLY, OBJ, STL, OFF, VTK, VTU, VTP).
 
 Folder layout read by :func:`read_cohort` (details in ``docs/cohort.md``)::
 
@@ -10,18 +10,19 @@ Folder layout read by :func:`read_cohort` (details in ``docs/cohort.md``)::
         subject002/es.ply
 
 Every mesh must have the atlas's vertex count and faces, in the same vertex
-order: vertex ``i`` of every file is the same anatomical point. PLY, OBJ and
-OFF are read through trimesh with ``process=False`` so that no vertex is merged
-or reordered. STL stores a triangle soup in float32: its vertices are merged
-back in order of first appearance in the faces (or, for a subject, by the
-atlas's faces), which restores the vertex order of files written from the same
-triangulation. Legacy VTK polydata (``DATASET POLYDATA``, ASCII or binary,
-file versions 2 to 5) is read by a small reader of this module.
+order: vertex ``i`` of every file is the same anatomical point. Files are read
+through meshio or, where they do better, trimesh or the readers of this package
+(the choice per format is in :mod:`ladders.study.mesh_readers`); no reader
+merges or reorders vertices. STL stores a triangle soup in float32: its
+vertices are merged back in order of first appearance in the faces (or, for a
+subject, by the atlas's faces), which restores the vertex order of files
+written from the same triangulation.
 """
 
 from __future__ import annotations
 
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -30,35 +31,42 @@ from trimesh.exchange.obj import export_obj
 from trimesh.exchange.off import export_off
 
 from .cohort import Cohort, MeshFolderError, Subject
+from .mesh_readers import read_first, read_with_meshio, read_with_trimesh, vtk_dataset
 from .vtk_io import read_vtk, write_vtk
+from .vtk_xml import read_vtp
 
 __all__ = [
+    "UnusedMeshFilesWarning",
     "MESH_EXTENSIONS",
+    "OTHER_MESH_EXTENSIONS",
+    "WRITE_EXTENSIONS",
     "MeshFolderError",
     "read_mesh",
     "write_mesh",
     "read_vtk",
+    "read_vtp",
     "write_vtk",
     "read_cohort",
+    "assemble_cohort",
+    "warn_unused",
     "write_cohort",
 ]
 
-MESH_EXTENSIONS = (".ply", ".obj", ".stl", ".off", ".vtk")
+
+class UnusedMeshFilesWarning(UserWarning):
+    """Files with a mesh extension next to a cohort that the cohort does not use."""
 
 
-def _merge_soup(soup: np.ndarray, faces=None) -> tuple[np.ndarray, np.ndarray]:
-    """Index a triangle soup ``(3f, 3)``: by reference ``faces`` or by first appearance."""
-    if faces is not None and len(faces) * 3 == len(soup):
-        faces = np.asarray(faces, dtype=np.int64)
-        vertices = np.zeros((int(faces.max()) + 1, 3))
-        vertices[faces.ravel()] = soup
-        if np.array_equal(vertices[faces.ravel()], soup):
-            return vertices, faces
-    _, first, inverse = np.unique(soup, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    return soup[first[order]], rank[inverse.ravel()].reshape(-1, 3)
+#: Extensions :func:`read_mesh` reads.
+MESH_EXTENSIONS = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu", ".vtp")
+#: Extensions of mesh formats not read; such files in a cohort folder are listed in a warning.
+OTHER_MESH_EXTENSIONS = (
+    ".msh", ".mesh", ".xdmf", ".xmf", ".inp", ".med", ".gii", ".glb", ".gltf", ".pvtu", ".pvtp",
+    ".vtm", ".wrl", ".x3d", ".dae", ".3ds", ".fbx", ".h5m", ".vol", ".ugrid", ".su2", ".nas",
+    ".bdf", ".exo", ".vti", ".vts", ".vtr",
+)  # fmt: skip
+#: Extensions :func:`write_mesh` writes.
+WRITE_EXTENSIONS = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu")
 
 
 def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
@@ -67,7 +75,9 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     path : str or Path
-        A ``.ply``, ``.obj``, ``.off``, ``.stl`` or ``.vtk`` file.
+        A file with one of the extensions :data:`MESH_EXTENSIONS`: PLY, OBJ, OFF,
+        STL, legacy VTK (polydata or unstructured grid), VTK XML unstructured
+        grid (``.vtu``) or polydata (``.vtp``).
     faces : array_like of int, shape (f, 3), optional
         For STL only: the triangulation the file was written from, used to
         index its triangle soup (otherwise vertices are numbered by first appearance).
@@ -83,17 +93,20 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
         raise MeshFolderError(f"{path}: unsupported extension, expected one of {MESH_EXTENSIONS}")
     if not path.is_file():
         raise MeshFolderError(f"{path}: no such file")
+    meshio = ("meshio", read_with_meshio)
+    trimesh_ = ("trimesh", lambda p: read_with_trimesh(p, faces))
     if ext == ".vtk":
-        v, f = read_vtk(path)
+        v, f = read_vtk(path) if vtk_dataset(path) == "POLYDATA" else read_with_meshio(path)
+    elif ext == ".vtp":
+        v, f = read_vtp(path)
+    elif ext == ".vtu":
+        v, f = read_with_meshio(path)
+    elif ext in (".ply", ".off"):
+        v, f = read_first(path, [meshio, trimesh_])
+    elif ext == ".obj":
+        v, f = read_first(path, [trimesh_, meshio])
     else:
-        kwargs = {"maintain_order": True} if ext == ".obj" else {}
-        try:
-            mesh = trimesh.load_mesh(path, process=False, **kwargs)
-            v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
-        except Exception as exc:  # trimesh raises many types on corrupt files
-            raise MeshFolderError(f"{path}: cannot be read as a mesh ({exc})") from exc
-        if ext == ".stl" and len(f):
-            v, f = _merge_soup(v[f.reshape(-1)], faces)
+        v, f = read_with_trimesh(path, faces)
     if len(v) == 0 or len(f) == 0:
         raise MeshFolderError(f"{path}: cannot be read as a triangle mesh (no vertices or faces)")
     if not np.isfinite(v).all():
@@ -104,11 +117,11 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_mesh(path, vertices, faces) -> Path:
-    """Write a triangle mesh; the format follows the extension (see ``MESH_EXTENSIONS``).
+    """Write a triangle mesh; the format follows the extension (see ``WRITE_EXTENSIONS``).
 
     PLY is written as binary little-endian with double coordinates, OBJ and OFF
-    with 17 significant digits, VTK as ASCII legacy polydata, STL as binary
-    float32 (the format's only precision).
+    with 17 significant digits, VTK as ASCII legacy polydata, VTU through meshio
+    (double, zlib-compressed), STL as binary float32 (the format's only precision).
     """
     path = Path(path)
     ext = path.suffix.lower()
@@ -116,6 +129,11 @@ def write_mesh(path, vertices, faces) -> Path:
     f = np.asarray(faces, dtype=np.int64)
     if ext == ".vtk":
         return write_vtk(path, v, f)
+    if ext == ".vtu":
+        import meshio
+
+        meshio.write(path, meshio.Mesh(v, [("triangle", f)]), file_format="vtu")
+        return path
     if ext == ".ply":
         header = (
             f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
@@ -138,7 +156,7 @@ def write_mesh(path, vertices, faces) -> Path:
     elif ext == ".stl":
         mesh.export(path, file_type="stl")
     else:
-        raise MeshFolderError(f"{path}: unsupported extension, expected one of {MESH_EXTENSIONS}")
+        raise MeshFolderError(f"{path}: unsupported extension, expected one of {WRITE_EXTENSIONS}")
     return path
 
 
@@ -147,8 +165,9 @@ def _natural_key(name: str):
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name)]
 
 
-def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]]]:
-    atlas, subjects = None, {}
+def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]], list[Path]]:
+    """Atlas, ``{subject: {phase: path}}`` and the files of formats not read."""
+    atlas, subjects, other = None, {}, []
 
     def add(name: str, phase: str, path: Path):
         if not name:
@@ -160,12 +179,19 @@ def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]]]:
             )
         slot[phase] = path
 
+    def usable(path: Path) -> bool:
+        if path.name.startswith(".") or not path.is_file():
+            return False
+        if path.suffix.lower() in OTHER_MESH_EXTENSIONS:
+            other.append(path)
+        return path.suffix.lower() in MESH_EXTENSIONS
+
     for path in sorted(folder.iterdir()):
         if path.name.startswith("."):
             continue
         if path.is_dir():
             for inner in sorted(path.iterdir()):
-                if inner.suffix.lower() not in MESH_EXTENSIONS or inner.name.startswith("."):
+                if not usable(inner):
                     continue
                 phase = inner.stem.lower()
                 if phase not in ("ed", "es"):
@@ -174,7 +200,7 @@ def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]]]:
                     )
                 add(path.name, phase, inner)
             continue
-        if path.suffix.lower() not in MESH_EXTENSIONS:
+        if not usable(path):
             continue
         stem = path.stem
         if stem.lower() == "atlas":
@@ -188,49 +214,28 @@ def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]]]:
                 f"{path}: name does not follow the layout 'atlas.<ext>', '<name>_ed.<ext>', "
                 "'<name>_es.<ext>'"
             )
-    return atlas, subjects
+    return atlas, subjects, other
 
 
-def read_cohort(folder, atlas=None) -> Cohort:
-    """Read a folder of meshes into a :class:`~ladders.cohort.Cohort`.
+def warn_unused(unused: list[tuple[Path, str]]) -> None:
+    """Warn (:class:`UnusedMeshFilesWarning`) about files with a mesh extension left out."""
+    if not unused:
+        return
+    listed = "; ".join(f"{path} ({why})" for path, why in unused[:20])
+    more = f"; and {len(unused) - 20} more" if len(unused) > 20 else ""
+    warnings.warn(
+        f"{len(unused)} mesh file(s) not used: {listed}{more}", UnusedMeshFilesWarning, stacklevel=3
+    )
 
-    Parameters
-    ----------
-    folder : str or Path
-        Folder with ``atlas.<ext>`` and, per subject, ``<name>_ed.<ext>`` and
-        ``<name>_es.<ext>`` (or a subfolder ``<name>/`` with ``ed.<ext>``, ``es.<ext>``).
-        Subjects are ordered by natural sort of their names.
-    atlas : str or Path, optional
-        Atlas file to use instead of ``folder/atlas.<ext>``.
 
-    Raises
-    ------
-    MeshFolderError
-        Missing folder or atlas, a subject without ED or ES, an unreadable file,
-        or a mesh whose vertex count or faces differ from the atlas's.
+def assemble_cohort(atlas_path: Path, entries: dict, source: str) -> Cohort:
+    """Read the atlas and every subject's ED and ES files, checking their correspondence.
+
+    ``entries`` maps subject names, in cohort order, to ``{"ed": path, "es": path}``.
     """
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise MeshFolderError(f"{folder}: not a folder")
-    found_atlas, entries = _scan(folder)
-    atlas_path = Path(atlas) if atlas is not None else found_atlas
-    if atlas_path is None:
-        raise MeshFolderError(
-            f"{folder}: no atlas file 'atlas.<ext>' ({', '.join(MESH_EXTENSIONS)})"
-        )
-    if not entries:
-        raise MeshFolderError(f"{folder}: no subject files '<name>_ed.<ext>' / '<name>_es.<ext>'")
     atlas_v, faces = read_mesh(atlas_path)
     subjects = []
-    for name in sorted(entries, key=_natural_key):
-        slot = entries[name]
-        for phase in ("ed", "es"):
-            if phase not in slot:
-                other = next(iter(slot.values()))
-                raise MeshFolderError(
-                    f"subject {name!r}: no {phase.upper()} mesh (found {other.name}; expected "
-                    f"'{name}_{phase}.<ext>' or '{name}/{phase}.<ext>')"
-                )
+    for name, slot in entries.items():
         shapes = {}
         for phase in ("ed", "es"):
             path = slot[phase]
@@ -247,7 +252,64 @@ def read_cohort(folder, atlas=None) -> Cohort:
                 )
             shapes[phase] = v
         subjects.append(Subject(name, shapes["ed"], shapes["es"]))
-    return Cohort(atlas_v, faces, subjects, source=str(folder))
+    return Cohort(atlas_v, faces, subjects, source=source)
+
+
+def read_cohort(folder, atlas=None) -> Cohort:
+    """Read a folder of meshes into a :class:`~ladders.cohort.Cohort`.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Folder with ``atlas.<ext>`` and, per subject, ``<name>_ed.<ext>`` and
+        ``<name>_es.<ext>`` (or a subfolder ``<name>/`` with ``ed.<ext>``, ``es.<ext>``).
+        Subjects are ordered by natural sort of their names.
+    atlas : str or Path, optional
+        Atlas file to use instead of ``folder/atlas.<ext>``.
+
+    Warns
+    -----
+    UnusedMeshFilesWarning
+        Lists the files of the folder (and of its subject subfolders) with the
+        extension of a mesh format that is not read (:data:`OTHER_MESH_EXTENSIONS`),
+        and ``atlas.<ext>`` when another atlas is given.
+
+    Raises
+    ------
+    MeshFolderError
+        Missing folder or atlas, a subject without ED or ES, an unreadable file,
+        or a mesh whose vertex count or faces differ from the atlas's.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise MeshFolderError(f"{folder}: not a folder")
+    found_atlas, entries, other = _scan(folder)
+    atlas_path = Path(atlas) if atlas is not None else found_atlas
+    if atlas_path is None:
+        raise MeshFolderError(
+            f"{folder}: no atlas file 'atlas.<ext>' ({', '.join(MESH_EXTENSIONS)}); "
+            "name one with atlas=PATH (--atlas PATH)"
+        )
+    if not entries:
+        raise MeshFolderError(f"{folder}: no subject files '<name>_ed.<ext>' / '<name>_es.<ext>'")
+    for name, slot in entries.items():
+        for phase in ("ed", "es"):
+            if phase not in slot:
+                found = next(iter(slot.values()))
+                raise MeshFolderError(
+                    f"subject {name!r}: no {phase.upper()} mesh (found {found.name}; expected "
+                    f"'{name}_{phase}.<ext>' or '{name}/{phase}.<ext>')"
+                )
+    unused = [(p, "format not read") for p in other]
+    if (
+        found_atlas is not None
+        and atlas is not None
+        and found_atlas.resolve() != atlas_path.resolve()
+    ):
+        unused.append((found_atlas, f"the atlas given is {atlas_path}"))
+    warn_unused(unused)
+    ordered = {name: entries[name] for name in sorted(entries, key=_natural_key)}
+    return assemble_cohort(atlas_path, ordered, source=str(folder))
 
 
 def write_cohort(cohort: Cohort, folder, ext: str = "ply", layout: str = "flat") -> Path:
@@ -259,7 +321,7 @@ def write_cohort(cohort: Cohort, folder, ext: str = "ply", layout: str = "flat")
     folder : str or Path
         Created if needed; existing files with the same names are overwritten.
     ext : str
-        One of ``ply``, ``obj``, ``off``, ``stl``, ``vtk``.
+        One of ``ply``, ``obj``, ``off``, ``stl``, ``vtk``, ``vtu``.
     layout : {"flat", "subfolders"}
         ``<name>_ed.<ext>`` next to the atlas, or ``<name>/ed.<ext>``.
 
@@ -269,8 +331,8 @@ def write_cohort(cohort: Cohort, folder, ext: str = "ply", layout: str = "flat")
         The folder.
     """
     ext = "." + ext.lower().lstrip(".")
-    if ext not in MESH_EXTENSIONS:
-        raise MeshFolderError(f"ext: expected one of {MESH_EXTENSIONS}, got {ext!r}")
+    if ext not in WRITE_EXTENSIONS:
+        raise MeshFolderError(f"ext: expected one of {WRITE_EXTENSIONS}, got {ext!r}")
     if layout not in ("flat", "subfolders"):
         raise MeshFolderError(f"layout: expected 'flat' or 'subfolders', got {layout!r}")
     folder = Path(folder)

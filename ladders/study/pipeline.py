@@ -106,7 +106,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
     )
 
 
-def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
+def _one_alpha(config, atlas, faces, subject, alpha2, las_subject, shapes=None) -> dict:
     space = make_space(config, atlas, alpha2)
     t, s, s2 = atlas, subject.ed, subject.es
     dist = l2_distance(space)
@@ -124,6 +124,8 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         errs = symmetry_errors(sp, t, s, s2, distance=dist)
         t_prime = errs.points["pole_ladder"]  # T' = s_T(s_M(S')), Algorithm 1
         las[variant] = area_strain(t, t_prime, faces)
+        if shapes is not None:
+            shapes[variant] = {key: np.asarray(v) for key, v in errs.points.items()}
         out[variant] = {name: float(getattr(errs, name)) for name in ERROR_NAMES}
         out[variant]["ase"] = area_strain_error(las_subject, las[variant])
     if config.deformation == "svf":  # SVF pole ladder: conjugation of exp(u) by exp(v/2)
@@ -132,17 +134,36 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject) -> dict:
         fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
         t_fan = space.shoot(t, fan.momenta, control_points=fan.control_points)
     las["fanning"] = area_strain(t, t_fan, faces)
+    if shapes is not None:
+        shapes["fanning"] = {"transported": np.asarray(t_fan)}
     out["fanning"] = {"ase": area_strain_error(las_subject, las["fanning"])}
     out["las"] = {key: np.asarray(v).tolist() for key, v in las.items()}
     out["n_registrations"] = int(space.n_registrations)
     return out
 
 
-def run_subject(config: StudyConfig, atlas, faces, subject: Subject) -> dict:
+def run_subject(
+    config: StudyConfig, atlas, faces, subject: Subject, keep_shapes: bool = False
+) -> dict:
     """All results of one subject over the ``alpha^2`` sweep (a JSON-ready dict).
 
-    ``subject`` has a ``name`` and ``ed``, ``es`` vertex arrays in correspondence
-    with ``atlas`` (e.g. a :class:`ladders.cohort.Subject`).
+    Parameters
+    ----------
+    config : StudyConfig
+    atlas : array, shape (k, 3)
+        The atlas ``T``.
+    faces : int array, shape (f, 3)
+    subject : Subject
+        A ``name`` and ``ed``, ``es`` vertex arrays ``(k, 3)`` in correspondence
+        with ``atlas`` (e.g. a :class:`ladders.study.cohort.Subject`).
+    keep_shapes : bool
+        Also return the computed shapes, under the key ``"shapes"``:
+        ``shapes[alpha2_key][variant]`` holds ``midpoint`` (``M``), ``reflected``
+        (``s_M(S')``) and ``pole_ladder`` (``T'``) for ``variant`` in
+        :data:`VARIANTS`, and ``shapes[alpha2_key]["fanning"]["transported"]``
+        the fanning scheme's ``T'``; every array is ``(k, 3)``. These arrays are
+        not JSON-serialisable: :func:`ladders.study.mesh_outputs.write_subject_meshes`
+        writes them as mesh files and removes them from the result.
     """
     start = time.perf_counter()
     las_subject = area_strain(subject.ed, subject.es, faces)
@@ -150,14 +171,18 @@ def run_subject(config: StudyConfig, atlas, faces, subject: Subject) -> dict:
     # the results and by the command line, rather than warned once per call.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ConvergenceWarning)
+        shapes = {str(float(a2)): {} for a2 in config.alpha2}
         results = {
-            str(float(a2)): _one_alpha(config, atlas, faces, subject, a2, las_subject)
-            for a2 in config.alpha2
-        }
+            key: _one_alpha(
+                config, atlas, faces, subject, float(key), las_subject,
+                shapes[key] if keep_shapes else None,
+            )
+            for key in shapes
+        }  # fmt: skip
     for w in caught:
         if not issubclass(w.category, ConvergenceWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return {
+    out = {
         "subject": subject.name,
         "alpha2": results,
         "non_converged_registrations": sum(
@@ -165,3 +190,6 @@ def run_subject(config: StudyConfig, atlas, faces, subject: Subject) -> dict:
         ),
         "seconds": time.perf_counter() - start,
     }
+    if keep_shapes:
+        out["shapes"] = shapes
+    return out

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .cohort import Subject
+from .mesh_outputs import write_subject_meshes
 from .pipeline import StudyConfig, run_subject
 from .store import SubjectStore, array_digest, atomic_write_text, config_hash
 
@@ -57,6 +58,7 @@ def run_study(
     jobs: int = 1,
     progress: bool = True,
     data_description: dict | None = None,
+    meshes: bool = True,
 ) -> StudyOutcome:
     """Run (or resume) the study and write per-subject results and a manifest.
 
@@ -79,6 +81,9 @@ def run_study(
         Show a progress bar (tqdm).
     data_description : dict, optional
         Recorded in the manifest (e.g. the cohort generator's parameters).
+    meshes : bool
+        Write each computed subject's shapes and strain maps as ``.vtu`` files
+        under ``output/meshes`` (see :mod:`ladders.study.mesh_outputs`).
 
     Returns
     -------
@@ -99,7 +104,9 @@ def run_study(
     skipped = [s.name for s in subjects if s not in todo]
 
     def task(subject):
-        result = run_subject(config, atlas, faces, subject)
+        result = run_subject(config, atlas, faces, subject, keep_shapes=meshes)
+        if meshes:
+            write_subject_meshes(output / "meshes", subject, atlas, faces, result)
         stores[subject.name].save(subject.name, result)  # written by the worker itself
         return subject.name
 

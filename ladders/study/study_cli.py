@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -45,12 +47,27 @@ def add_study_parser(sub) -> None:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--output", "-o", default="symladders-output/study", help="results folder")
-    p.add_argument(
+    source = p.add_mutually_exclusive_group()
+    source.add_argument(
         "--meshes",
         type=Path,
         default=None,
         help="folder of meshes (atlas.<ext>, <subject>_ed.<ext>, <subject>_es.<ext>; "
-        "PLY/OBJ/STL/OFF/VTK) instead of the built-in synthetic cohort",
+        "PLY/OBJ/STL/OFF/VTK/VTU/VTP) instead of the built-in synthetic cohort",
+    )
+    source.add_argument(
+        "--cohort",
+        type=Path,
+        default=None,
+        help="CSV table with the columns subject, ed, es (mesh paths relative to the table) "
+        "instead of the built-in synthetic cohort",
+    )
+    p.add_argument(
+        "--atlas",
+        type=Path,
+        default=None,
+        help="atlas mesh (with --meshes or --cohort); default: atlas.<ext> in the folder "
+        "or next to the table",
     )
     p.add_argument(
         "--subjects",
@@ -101,17 +118,38 @@ def add_study_parser(sub) -> None:
         help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--no-meshes",
+        action="store_true",
+        help="do not write the .vtu meshes (M, s_M(S'), T' and strain maps) under OUTPUT/meshes",
+    )
     p.set_defaults(run=run_study_command)
 
 
 def _load_cohort(args):
-    from .mesh_io import read_cohort
+    from .cohort_table import read_cohort_table
+    from .mesh_io import UnusedMeshFilesWarning, read_cohort
     from .synthetic_lv import make_synthetic_cohort
 
     n = args.subjects
-    if args.meshes is not None:
-        cohort = read_cohort(args.meshes)
-        description = {"source": "folder", "folder": str(args.meshes.resolve())}
+    if args.atlas is not None and args.meshes is None and args.cohort is None:
+        raise SystemExit("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
+    if args.meshes is not None or args.cohort is not None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnusedMeshFilesWarning)
+            if args.meshes is not None:
+                cohort = read_cohort(args.meshes, atlas=args.atlas)
+                description = {"source": "folder", "folder": str(args.meshes.resolve())}
+            else:
+                cohort = read_cohort_table(args.cohort, atlas=args.atlas)
+                description = {"source": "table", "table": str(args.cohort.resolve())}
+        for w in caught:  # one readable line each, not a source location
+            if issubclass(w.category, UnusedMeshFilesWarning):
+                print(f"symladders study: warning: {w.message}", file=sys.stderr)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        if args.atlas is not None:
+            description["atlas"] = str(args.atlas.resolve())
         if n is not None:
             cohort = cohort.head(n)
     else:
@@ -184,9 +222,16 @@ def run_study_command(args) -> int:
             jobs=args.jobs,
             progress=not args.no_progress,
             data_description=description,
+            meshes=not args.no_meshes,
         )
     if outcome.skipped:
         print(f"resumed: {len(outcome.skipped)} subject(s) already finished were skipped")
+        bare = [n for n in outcome.skipped if not (Path(args.output) / "meshes" / n).is_dir()]
+        if bare and not args.no_meshes:
+            print(
+                f"note: {len(bare)} skipped subject(s) have no mesh files (computed with "
+                "--no-meshes); delete their subjects/<name>.json to compute them with meshes"
+            )
     paths = write_report(
         outcome.results, args.output, cohort.atlas, cohort.faces, cohort.subjects[0].ed
     )

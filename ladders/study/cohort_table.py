@@ -1,0 +1,162 @@
+"""A cohort listed in a CSV table instead of named by the folder layout.
+
+The table has a header row with (at least) the columns ``subject``, ``ed`` and
+``es``, in any order and any letter case; ``ed`` and ``es`` are paths of the
+end-diastole and end-systole meshes, absolute or relative to the table's
+folder::
+
+    subject,ed,es
+    patient01,scans/p01/frame_00.vtp,scans/p01/frame_09.vtp
+    patient02,scans/p02/frame_00.vtp,scans/p02/frame_11.vtp
+
+Subjects keep the table's order. The atlas is given by ``atlas=PATH`` or is the
+``atlas.<ext>`` file next to the table.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+from .cohort import Cohort, MeshFolderError
+from .mesh_io import (
+    MESH_EXTENSIONS,
+    OTHER_MESH_EXTENSIONS,
+    assemble_cohort,
+    warn_unused,
+)
+
+__all__ = ["read_cohort_table"]
+
+_COLUMNS = ("subject", "ed", "es")
+
+
+def _rows(table: Path) -> list[tuple[int, dict[str, str]]]:
+    try:
+        text = table.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MeshFolderError(f"{table}: cannot be read ({exc})") from exc
+    reader = csv.reader(text.splitlines())
+    header = next(reader, None)
+    if header is None:
+        raise MeshFolderError(f"{table}: empty table, expected a header row 'subject,ed,es'")
+    names = [h.strip().lower() for h in header]
+    missing = [c for c in _COLUMNS if c not in names]
+    if missing:
+        raise MeshFolderError(
+            f"{table}: missing column(s) {missing}; expected the columns 'subject', 'ed', 'es', "
+            f"found {header}"
+        )
+    rows = []
+    for line, values in enumerate(reader, start=2):
+        if not any(v.strip() for v in values):
+            continue
+        if len(values) != len(names):
+            raise MeshFolderError(
+                f"{table} line {line}: {len(values)} values for {len(names)} columns"
+            )
+        rows.append((line, {n: v.strip() for n, v in zip(names, values, strict=True)}))
+    if not rows:
+        raise MeshFolderError(f"{table}: no subject rows below the header")
+    return rows
+
+
+def _mesh_path(table: Path, line: int, value: str, column: str) -> Path:
+    if not value:
+        raise MeshFolderError(f"{table} line {line}: empty '{column}' path")
+    path = Path(value).expanduser()
+    path = path if path.is_absolute() else table.parent / path
+    if path.suffix.lower() not in MESH_EXTENSIONS:
+        raise MeshFolderError(
+            f"{table} line {line}: '{column}' file {path} has an unsupported extension, "
+            f"expected one of {MESH_EXTENSIONS}"
+        )
+    if not path.is_file():
+        raise MeshFolderError(f"{table} line {line}: '{column}' file {path} does not exist")
+    return path
+
+
+def _atlas_next_to(table: Path) -> Path:
+    found = [
+        p for p in sorted(table.parent.iterdir())
+        if p.stem.lower() == "atlas" and p.suffix.lower() in MESH_EXTENSIONS
+    ]  # fmt: skip
+    if len(found) != 1:
+        what = "no" if not found else f"{len(found)} ({', '.join(p.name for p in found)})"
+        raise MeshFolderError(
+            f"{table}: {what} atlas file 'atlas.<ext>' next to the table; "
+            "name the atlas with atlas=PATH (--atlas PATH)"
+        )
+    return found[0]
+
+
+def _unused(table: Path, used: set[Path]) -> list[tuple[Path, str]]:
+    """Mesh files in the table's folder and its direct subfolders that the cohort leaves out."""
+    candidates = []
+    for path in sorted(table.parent.iterdir()):
+        if path.is_dir() and not path.name.startswith("."):
+            candidates.extend(sorted(path.iterdir()))
+        else:
+            candidates.append(path)
+    unused = []
+    for path in candidates:
+        ext = path.suffix.lower()
+        if path.name.startswith(".") or not path.is_file() or path.resolve() in used:
+            continue
+        if ext in MESH_EXTENSIONS:
+            unused.append((path, f"not in {table.name}"))
+        elif ext in OTHER_MESH_EXTENSIONS:
+            unused.append((path, "format not read"))
+    return unused
+
+
+def read_cohort_table(table, atlas=None) -> Cohort:
+    """Read the cohort listed in a CSV table (format in the module docstring).
+
+    Parameters
+    ----------
+    table : str or Path
+        CSV file with the columns ``subject``, ``ed``, ``es``.
+    atlas : str or Path, optional
+        The atlas mesh; default: the one ``atlas.<ext>`` next to the table.
+
+    Returns
+    -------
+    Cohort
+        Subjects in the table's order; ``source`` is the table's path.
+
+    Warns
+    -----
+    UnusedMeshFilesWarning
+        Lists the mesh files of the table's folder (and of its direct
+        subfolders) that neither the table nor the atlas uses.
+
+    Raises
+    ------
+    MeshFolderError
+        A missing table or column, an empty or duplicated subject name, a
+        missing mesh file (naming the table's line), or meshes that do not
+        correspond to the atlas (naming the file).
+    """
+    table = Path(table)
+    if not table.is_file():
+        raise MeshFolderError(f"{table}: no such cohort table")
+    entries: dict[str, dict[str, Path]] = {}
+    for line, row in _rows(table):
+        name = row["subject"]
+        if not name:
+            raise MeshFolderError(f"{table} line {line}: empty subject name")
+        if any(c in name for c in "/\\") or name in (".", ".."):
+            raise MeshFolderError(
+                f"{table} line {line}: subject name {name!r} must not be a path "
+                "(it names the subject's result files)"
+            )
+        if name in entries:
+            raise MeshFolderError(f"{table} line {line}: subject {name!r} is listed twice")
+        entries[name] = {c: _mesh_path(table, line, row[c], c) for c in ("ed", "es")}
+    atlas_path = Path(atlas) if atlas is not None else _atlas_next_to(table)
+    if not atlas_path.is_file():
+        raise MeshFolderError(f"{atlas_path}: no such atlas file")
+    used = {atlas_path.resolve()} | {p.resolve() for s in entries.values() for p in s.values()}
+    warn_unused(_unused(table, used))
+    return assemble_cohort(atlas_path, entries, source=str(table))

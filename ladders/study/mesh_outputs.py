@@ -1,0 +1,173 @@
+"""Mesh files of a study's shapes and area strains, to open in ParaView or any VTK viewer.
+
+For every subject and every ``alpha^2`` the study computes, with and without
+residuals, the midpoint ``M``, the reflected end-systole ``s_M(S')`` and the
+pole-ladder transport ``T' = s_T(s_M(S'))`` (Algorithm 1), and the fanning
+scheme's ``T'``. :func:`write_subject_meshes` writes them through meshio
+(``.vtu`` by default, legacy ``.vtk`` on request) with per-vertex point data::
+
+    meshes/
+        atlas.vtu                              T, written once
+        <subject>/
+            S.vtu, S_prime.vtu                 the subject's S and S'
+            alpha2_<a>/
+                pole_ladder_residual_M.vtu            M
+                pole_ladder_residual_sM_Sprime.vtu    s_M(S')
+                pole_ladder_residual_Tprime.vtu       T'
+                pole_ladder_no_residual_{M,sM_Sprime,Tprime}.vtu
+                fanning_Tprime.vtu                    T' of the fanning scheme
+
+Point data (every shape is in vertex correspondence with the atlas, so a
+vertex's value is attached to the same material point on every mesh):
+
+``las_subject``
+    Local area strain from ``S`` to ``S'`` (the subject's own motion). On the
+    atlas-side meshes (``M``, ``s_M(S')``, ``T'``) it is shown through the vertex
+    correspondence: the value at vertex ``i`` is the strain of the subject at
+    its vertex ``i``.
+``las_transported``
+    Local area strain from ``T`` to ``T'`` for the file's transport method.
+``las_difference``
+    ``las_transported - las_subject``; its L2 norm over the vertices is the ASE.
+``displacement``
+    On ``T'``: ``T' - T``; on ``S`` and ``S'``: ``S' - S`` (vectors, for
+    ParaView's *Warp By Vector*).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+from .cohort import MeshFolderError, Subject
+from .pipeline import VARIANTS
+
+__all__ = ["MESH_OUTPUT_FORMATS", "write_point_mesh", "write_subject_meshes", "method_names"]
+
+#: Extensions of the mesh files a study can write.
+MESH_OUTPUT_FORMATS = (".vtu", ".vtk")
+
+_SHAPE_FILES = {"midpoint": "M", "reflected": "sM_Sprime", "pole_ladder": "Tprime"}
+
+
+def method_names() -> dict[str, str]:
+    """Transport method name in file names, keyed by the result's variant key."""
+    names = {variant: f"pole_ladder_{variant}" for variant in VARIANTS}
+    names["fanning"] = "fanning"
+    return names
+
+
+def write_point_mesh(path, vertices, faces, point_data: dict | None = None) -> Path:
+    """Write a triangle mesh with point data through meshio, atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        Target file; its extension (one of :data:`MESH_OUTPUT_FORMATS`) gives the
+        format: VTK XML unstructured grid (``.vtu``, zlib-compressed) or legacy
+        VTK (``.vtk``, binary).
+    vertices : array_like, shape (k, 3)
+    faces : array_like of int, shape (f, 3)
+    point_data : dict of str to array_like, optional
+        Arrays of shape ``(k,)`` (scalars) or ``(k, 3)`` (vectors).
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in MESH_OUTPUT_FORMATS:
+        raise MeshFolderError(f"{path}: output format must be one of {MESH_OUTPUT_FORMATS}")
+    v = np.asarray(vertices, dtype=np.float64)
+    data = {}
+    for name, values in (point_data or {}).items():
+        arr = np.asarray(values, dtype=np.float64)
+        if arr.shape[:1] != (len(v),):
+            raise MeshFolderError(
+                f"point_data[{name!r}]: expected {len(v)} values (one per vertex), got {arr.shape}"
+            )
+        data[name] = arr
+    mesh = meshio.Mesh(v, [("triangle", np.asarray(faces, dtype=np.int64))], point_data=data)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=ext)
+    os.close(fd)
+    try:
+        meshio.write(tmp, mesh, file_format="vtu" if ext == ".vtu" else "vtk", binary=True)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _alpha_folder(alpha2_key: str) -> str:
+    return f"alpha2_{float(alpha2_key):g}"
+
+
+def write_subject_meshes(
+    folder, subject: Subject, atlas, faces, result: dict, ext: str = ".vtu"
+) -> list[Path]:
+    """Write one subject's shapes and strain maps (layout in the module docstring).
+
+    Parameters
+    ----------
+    folder : str or Path
+        The meshes folder (``<study output>/meshes``); created if needed. The
+        atlas is written there unless it already exists.
+    subject : Subject
+        ``name``, ``ed`` (``S``) and ``es`` (``S'``), each ``(k, 3)``.
+    atlas : array_like, shape (k, 3)
+        The atlas ``T``.
+    faces : array_like of int, shape (f, 3)
+    result : dict
+        The output of :func:`ladders.study.pipeline.run_subject` called with
+        ``keep_shapes=True``. Its ``"shapes"`` entry is removed (so the result
+        is JSON-ready again); its per-``alpha^2`` ``"las"`` lists give the strains.
+    ext : {".vtu", ".vtk"}
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    if "shapes" not in result:
+        raise MeshFolderError(
+            "result: no 'shapes' entry; call run_subject(..., keep_shapes=True) to write meshes"
+        )
+    shapes = result.pop("shapes")
+    folder = Path(folder)
+    atlas = np.asarray(atlas, dtype=np.float64)
+    written = []
+    if not (folder / f"atlas{ext}").exists():
+        written.append(write_point_mesh(folder / f"atlas{ext}", atlas, faces))
+    base = folder / subject.name
+    first = next(iter(result["alpha2"].values()))
+    las_subject = np.asarray(first["las"]["subject"])
+    motion = {"las_subject": las_subject, "displacement": subject.es - subject.ed}
+    written.append(write_point_mesh(base / f"S{ext}", subject.ed, faces, motion))
+    written.append(write_point_mesh(base / f"S_prime{ext}", subject.es, faces, motion))
+    for key, node in result["alpha2"].items():
+        sub = base / _alpha_folder(key)
+        for variant, method in method_names().items():
+            las_t = np.asarray(node["las"][variant])
+            data = {
+                "las_subject": las_subject,
+                "las_transported": las_t,
+                "las_difference": las_t - las_subject,
+            }
+            points = dict(shapes[key][variant])
+            if "transported" in points:  # the fanning scheme: T' only
+                points = {"pole_ladder": points.pop("transported")}
+            for shape, label in _SHAPE_FILES.items():
+                if shape not in points:
+                    continue
+                extra = {"displacement": points[shape] - atlas} if shape == "pole_ladder" else {}
+                path = sub / f"{method}_{label}{ext}"
+                written.append(write_point_mesh(path, points[shape], faces, {**data, **extra}))
+    return written
