@@ -239,7 +239,7 @@ class GeomstatsConnection(Connection):
         x = self.check_point(point, "point")
         if not np.isfinite(scale) or scale < 0:
             raise ManifoldError(f"{self.name}: scale must be finite and >= 0, got {scale!r}")
-        batch = self.batch_shape(x)
+        batch = x.shape[: x.ndim - len(self.point_shape)]  # check_point checked the trailing axes
         ambient = rng.standard_normal(x.shape)
         direction = self._call(lambda g, p: self.space.to_tangent(g, p), ambient, x)
         length = scale * np.sqrt((rng.standard_normal((*batch, self.dim)) ** 2).mean(axis=-1))
