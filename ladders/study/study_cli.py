@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -148,7 +149,7 @@ def run_study_command(args) -> int:
     """Run the study from parsed command-line arguments."""
     from .pipeline import StudyConfig
     from .report import summarize, summary_markdown, write_report
-    from .runner import run_study
+    from .runner import mesh_files, run_study
 
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
@@ -177,9 +178,10 @@ def run_study_command(args) -> int:
             jobs=args.jobs,
             progress=not args.no_progress,
             data_description=description,
+            input_files=mesh_files(args.meshes) if args.meshes is not None else None,
         )
     if outcome.skipped:
-        print(f"resumed: {len(outcome.skipped)} subject(s) already finished were skipped")
+        print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
     paths = write_report(
         outcome.results, args.output, cohort.atlas, cohort.faces, cohort.subjects[0].ed
     )
@@ -193,4 +195,11 @@ def run_study_command(args) -> int:
     )
     print("Files:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
     print(f"Total wall time {time.perf_counter() - start:.1f} s")
+    if outcome.failures:
+        print(
+            f"symladders study: {outcome.n_failed_subjects} subject(s) failed "
+            f"({len(outcome.failures)} pair(s)); errors in summary.md and the result files",
+            file=sys.stderr,
+        )
+        return 1
     return 0
