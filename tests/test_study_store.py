@@ -213,3 +213,37 @@ def test_manifest_records_provenance(tmp_path):
     assert manifest["pairs_computed_this_run"] == 2 and manifest["failed_subjects"] == 0
     copy = tmp_path / "out" / "results" / out.config_id / "manifest.json"
     assert json.loads(copy.read_text()) == manifest
+
+
+def test_a_reused_pid_does_not_hold_a_claim(tmp_path):
+    """A live pid whose process started after the claim was written does not hold it."""
+    config_id, _ = configuration_id(CFG, COHORT.atlas, COHORT.faces)
+    store = PairStore(tmp_path, config_id)
+    name = COHORT.names[0]
+    claim = store.path(name, 100.0).with_name("alpha2=100.0.json.claim")
+    claim.parent.mkdir(parents=True)
+    holder = {"host": os.uname().nodename, "pid": os.getpid(), "start": "0"}
+    claim.write_text(json.dumps(holder))
+    if not os.path.exists(f"/proc/{os.getpid()}/stat"):
+        pytest.skip("process start times need /proc")
+    assert store.claim_is_stale(name, 100.0)
+    claim.unlink()
+    assert store.claim(name, 100.0)  # our own live claim holds
+    assert not store.claim_is_stale(name, 100.0) and not store.claim(name, 100.0)
+    store.release(name, 100.0)
+    assert not claim.exists()
+
+
+def test_a_non_finite_result_is_recorded_as_failed(tmp_path, monkeypatch):
+    original = runner_mod._one_alpha
+
+    def nan_centrality(config, atlas, faces, subject, alpha2, las_subject):
+        out = original(config, atlas, faces, subject, alpha2, las_subject)
+        if subject.name == COHORT.names[1]:
+            out["residual"]["centrality"] = float("nan")
+        return out
+
+    monkeypatch.setattr(runner_mod, "_one_alpha", nan_centrality)
+    out = _run(CFG, tmp_path)
+    assert [f["subject"] for f in out.failures] == [COHORT.names[1]]
+    assert out.failures[0]["error"].endswith("non-finite: residual.centrality")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 import traceback
 import warnings
@@ -15,10 +16,17 @@ from manifolds.errors import ConvergenceWarning
 from manifolds.lddmm.kernels import GaussianKernel
 
 from .area_strain import area_strain
-from .cohort import Subject
+from .cohort import CohortError, Subject
 from .pipeline import StudyConfig, _one_alpha
 from .provenance import write_manifest
-from .store import PairStore, array_digest, atomic_write_text, config_hash, validate_subject_name
+from .store import (
+    PairStore,
+    array_digest,
+    atomic_write_text,
+    config_hash,
+    missing_fields,
+    validate_subject_name,
+)
 
 __all__ = ["StudyOutcome", "run_study", "compute_pair", "configuration_id", "mesh_files"]
 
@@ -115,14 +123,20 @@ def _attempt(config, atlas, faces, subject, alpha2) -> dict:
     """:func:`compute_pair`, with any exception recorded as a failed result."""
     start = time.perf_counter()
     try:
-        return compute_pair(config, atlas, faces, subject, alpha2)
+        out = compute_pair(config, atlas, faces, subject, alpha2)
     except Exception as exc:  # a failing subject must not stop the others
-        return {
-            "status": "failed",
-            "error": f"{type(exc).__name__}: {exc}",
-            "traceback": traceback.format_exc(),
-            "seconds": time.perf_counter() - start,
-        }
+        error, trace = f"{type(exc).__name__}: {exc}", traceback.format_exc()
+    else:
+        missing = missing_fields(out)
+        if not missing:
+            return out
+        error, trace = f"incomplete result, missing or non-finite: {', '.join(missing)}", ""
+    return {
+        "status": "failed",
+        "error": error,
+        "traceback": trace,
+        "seconds": time.perf_counter() - start,
+    }
 
 
 def _subject_task(config, atlas, faces, subject, alphas, store, config_id) -> dict:
@@ -166,6 +180,11 @@ def _run_parallel(tasks, jobs: int, progress: bool) -> list[dict]:
 def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id) -> list:
     """Wait for pairs claimed by other runs; take over those whose holder died."""
     busy, taken_over = list(busy), []
+    if busy:
+        print(
+            f"waiting for {len(busy)} (subject, alpha^2) pair(s) claimed by another run",
+            file=sys.stderr,
+        )
     while busy:
         left = []
         for name, a2 in busy:
@@ -211,7 +230,7 @@ def _check_subjects(subjects) -> None:
     names = [validate_subject_name(s.name) for s in subjects]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
-        raise ValueError(f"subjects: subject names must be unique, repeated: {dup}")
+        raise CohortError(f"subjects: subject names must be unique, repeated: {dup}")
 
 
 def run_study(

@@ -15,9 +15,10 @@ and renamed over the final name (atomic on POSIX and Windows), with the
 permissions the user's umask gives. A file is reused only if it parses, carries
 the expected parameter hash and has every field of :data:`RESULT_SCHEMA`;
 otherwise the pair is recomputed. Before computing a pair a run creates a
-claim file with ``O_CREAT | O_EXCL`` holding its host and process id, so two
-runs into one folder never compute the same pair twice; the claim of a process
-that no longer exists (on the same host) is taken over.
+claim file with ``O_CREAT | O_EXCL`` holding its host, process id and the
+process's start time, so two runs into one folder never compute the same pair
+twice; the claim of a process that no longer exists on the same host (or whose
+pid now belongs to a process started later) is taken over.
 """
 
 from __future__ import annotations
@@ -33,12 +34,16 @@ from pathlib import Path
 
 import numpy as np
 
+from .cohort import CohortError
+
 __all__ = [
     "atomic_write_text",
     "array_digest",
     "config_hash",
     "validate_subject_name",
     "RESULT_SCHEMA",
+    "check_result",
+    "missing_fields",
     "PairStore",
 ]
 
@@ -117,8 +122,8 @@ def validate_subject_name(name) -> str:
 
     Raises
     ------
-    ValueError
-        If ``name`` is not a non-empty string, is ``.`` or ``..``, starts with a
+    CohortError
+        (a ``ValueError``) If ``name`` is not a non-empty string, is ``.`` or ``..``, starts with a
         dot, or holds a path separator or a NUL character.
     """
     bad = (
@@ -128,7 +133,7 @@ def validate_subject_name(name) -> str:
         or any(c in name for c in ("/", "\\", "\0"))
     )
     if bad:
-        raise ValueError(
+        raise CohortError(
             "subjects: a subject name must be a non-empty file name without path "
             f"separators, NUL or a leading dot ('.', '..'), got {name!r}"
         )
@@ -139,26 +144,38 @@ def _finite(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
-def check_result(data) -> bool:
-    """Whether a stored pair result has every field of :data:`RESULT_SCHEMA`."""
+def missing_fields(data) -> list[str]:
+    """Fields of :data:`RESULT_SCHEMA` that a pair result lacks (or holds with a bad value)."""
     if not isinstance(data, dict):
-        return False
+        return ["<not a JSON object>"]
     if data.get("status") == "failed":
-        return isinstance(data.get("error"), str)
+        return [] if isinstance(data.get("error"), str) else ["error"]
     if data.get("status") != "ok":
-        return False
-    if not all(_finite(data.get(k)) for k in RESULT_SCHEMA["numbers"]):
-        return False
-    if not all(isinstance(data.get(k), bool) for k in RESULT_SCHEMA["flags"]):
-        return False
+        return ["status"]
+    missing = [k for k in RESULT_SCHEMA["numbers"] if not _finite(data.get(k))]
+    missing += [k for k in RESULT_SCHEMA["flags"] if not isinstance(data.get(k), bool)]
     for variant, names in RESULT_SCHEMA["variants"].items():
         node = data.get(variant)
-        if not isinstance(node, dict) or not all(_finite(node.get(n)) for n in names):
-            return False
+        node = node if isinstance(node, dict) else {}
+        missing += [f"{variant}.{n}" for n in names if not _finite(node.get(n))]
     maps = data.get("las")
-    return isinstance(maps, dict) and all(
-        isinstance(maps.get(k), list) for k in RESULT_SCHEMA["maps"]
-    )
+    maps = maps if isinstance(maps, dict) else {}
+    missing += [f"las.{k}" for k in RESULT_SCHEMA["maps"] if not isinstance(maps.get(k), list)]
+    return missing
+
+
+def check_result(data) -> bool:
+    """Whether a stored pair result has every field of :data:`RESULT_SCHEMA`."""
+    return not missing_fields(data)
+
+
+def _process_start(pid: int) -> str | None:
+    """Start time of a process (Linux ``/proc``), to tell a reused pid from the claimant."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return None
 
 
 def _pid_alive(pid: int) -> bool:
@@ -217,7 +234,8 @@ class PairStore:
         """Claim a pair for this process; ``False`` if a live process holds it."""
         path = self._claim_path(name, alpha2)
         path.parent.mkdir(parents=True, exist_ok=True)
-        body = json.dumps({"host": socket.gethostname(), "pid": os.getpid()})
+        pid = os.getpid()
+        body = json.dumps({"host": socket.gethostname(), "pid": pid, "start": _process_start(pid)})
         for _ in range(2):
             try:
                 fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666)
@@ -245,7 +263,12 @@ class PairStore:
                 return time.time() - path.stat().st_mtime > _UNREADABLE_CLAIM_S
             except OSError:
                 return True
-        return host == socket.gethostname() and not _pid_alive(pid)
+        if host != socket.gethostname():
+            return False  # cannot check another host's processes
+        if not _pid_alive(pid):
+            return True
+        start = holder.get("start")  # a live pid with another start time was reused
+        return start is not None and _process_start(pid) not in (None, start)
 
     def release(self, name: str, alpha2: float) -> None:
         self._claim_path(name, alpha2).unlink(missing_ok=True)
