@@ -226,6 +226,20 @@ def _collect(subjects, alphas, store, config_id) -> tuple[list, list]:
     return results, failures
 
 
+def _pending(subjects, alphas, store, config_id) -> list[tuple[Subject, list[float]]]:
+    """Per subject, the alpha^2 without a successful stored result (subjects with none left out)."""
+    out = []
+    for s in subjects:
+        todo = []
+        for a2 in alphas:
+            data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
+            if data is None or data["status"] != "ok":
+                todo.append(a2)
+        if todo:
+            out.append((s, todo))
+    return out
+
+
 def _check_subjects(subjects) -> None:
     names = [validate_subject_name(s.name) for s in subjects]
     if len(set(names)) != len(names):
@@ -283,15 +297,10 @@ def run_study(
     store = PairStore(output, config_id)
     atomic_write_text(store.root / "config.json", json.dumps(shared, indent=2))
     alphas = [float(a) for a in config.alpha2]
-
-    def done(s, a2):
-        data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
-        return data is not None and data["status"] == "ok"
-
-    todo = {s.name: [a for a in alphas if not done(s, a)] for s in subjects}
     by_name = {s.name: s for s in subjects}
     tasks = [
-        (config, atlas, faces, s, todo[s.name], store, config_id) for s in subjects if todo[s.name]
+        (config, atlas, faces, s, todo, store, config_id)
+        for s, todo in _pending(subjects, alphas, store, config_id)
     ]
     reports = _run_parallel(tasks, jobs, progress)
     computed = [(r["subject"], a) for r in reports for a in r["computed"]]
