@@ -100,7 +100,10 @@ def compute_pair(config: StudyConfig, atlas, faces, subject: Subject, alpha2: fl
     """The results of one subject at one ``alpha^2`` (a JSON-ready dict, ``status: "ok"``).
 
     Registrations stopped by the iteration limit are counted in
-    ``non_converged_registrations`` rather than warned once per call.
+    ``non_converged_registrations`` rather than warned once per call. The count
+    is taken from the warnings, whose capture is process-wide: with a
+    thread-based backend (Dask workers with several threads) concurrent pairs
+    may count one another's warnings, so it is exact only with process workers.
     """
     start = time.perf_counter()
     las_subject = area_strain(subject.ed, subject.es, faces)

@@ -40,8 +40,8 @@ def add_study_parser(sub) -> None:
             f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)} by default; --full gives the paper's "
             f"setting: {FULL_SUBJECTS} subjects and alpha^2 in "
             f"{','.join(f'{a:g}' for a in FULL_ALPHA2)}). Results are written per subject as "
-            "they finish; rerunning with the same output folder resumes and skips finished "
-            "subjects."
+            "they finish; rerunning with the same output folder resumes and computes only the "
+            "missing (subject, alpha^2) pairs."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
