@@ -27,7 +27,7 @@ def study(tmp_path_factory):
 
 def test_every_output_mesh_carries_the_named_point_data(study):
     k = COHORT.n_vertices
-    folder = study.output / "meshes"
+    folder = study.output / "meshes" / study.config_id
     atlas = meshio.read(folder / "atlas.vtu")
     np.testing.assert_array_equal(atlas.points, COHORT.atlas)
     np.testing.assert_array_equal(atlas.cells_dict["triangle"], COHORT.faces)
@@ -73,7 +73,7 @@ def test_midpoint_mesh_matches_run_subject(study):
     shapes = result["shapes"]["1.0"]
     for variant in ("residual", "no_residual"):
         for shape, label in (("midpoint", "M"), ("reflected", "sM_Sprime")):
-            path = study.output / "meshes" / subject.name / "alpha2_1"
+            path = study.output / "meshes" / study.config_id / subject.name / "alpha2_1"
             mesh = meshio.read(path / f"pole_ladder_{variant}_{label}.vtu")
             np.testing.assert_allclose(mesh.points, shapes[variant][shape], rtol=0, atol=1e-9)
 
@@ -116,4 +116,4 @@ def test_cli_no_meshes_then_resume_says_meshes_are_missing(tmp_path, capsys):
     capsys.readouterr()
     assert main(args) == 0
     out = capsys.readouterr().out
-    assert "note: 1 skipped subject(s) have no mesh files" in out
+    assert "note: 1 skipped (subject, alpha^2) pair(s) have no mesh files" in out

@@ -8,7 +8,8 @@
 - local area strain (:func:`area_strain`, :func:`area_strain_error`);
 - the study: per-subject pipeline (:func:`run_subject`), the runner with its
   resumable store (:func:`run_study`), the report (:func:`summarize`,
-  :func:`write_report`) and the ``symladders`` command line (:mod:`.cli`);
+  :func:`write_report`, :func:`tidy_rows`, :func:`paired_statistics`) and the
+  ``symladders`` command line (:mod:`.cli`);
 - the analytic validation run (:func:`run_validation`) and the registration
   benchmark's shapes (:func:`bent_ellipsoid`).
 """
@@ -30,7 +31,8 @@ from .mesh_io import (
 from .mesh_outputs import write_point_mesh, write_subject_meshes
 from .pipeline import ERROR_NAMES, VARIANTS, StudyConfig, run_subject
 from .report import summarize, summary_markdown, write_report
-from .runner import run_study
+from .runner import compute_pair, run_study
+from .statistics import paired_comparison, paired_statistics, tidy_rows
 from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
 from .vtk_io import read_vtk, write_vtk
 from .vtk_xml import read_vtp
@@ -66,6 +68,10 @@ __all__ = [
     "StudyConfig",
     "run_subject",
     "run_study",
+    "compute_pair",
+    "tidy_rows",
+    "paired_comparison",
+    "paired_statistics",
     "summarize",
     "summary_markdown",
     "write_report",

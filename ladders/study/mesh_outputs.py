@@ -106,8 +106,9 @@ def write_point_mesh(path, vertices, faces, point_data: dict | None = None) -> P
     return path
 
 
-def _alpha_folder(alpha2_key: str) -> str:
-    return f"alpha2_{float(alpha2_key):g}"
+def alpha_folder(alpha2) -> str:
+    """Name of the folder of one ``alpha^2`` (a number or its string key), e.g. ``alpha2_0.01``."""
+    return f"alpha2_{float(alpha2):g}"
 
 
 def write_subject_meshes(
@@ -153,7 +154,7 @@ def write_subject_meshes(
     written.append(write_point_mesh(base / f"S{ext}", subject.ed, faces, motion))
     written.append(write_point_mesh(base / f"S_prime{ext}", subject.es, faces, motion))
     for key, node in result["alpha2"].items():
-        sub = base / _alpha_folder(key)
+        sub = base / alpha_folder(key)
         for variant, method in method_names().items():
             las_t = np.asarray(node["las"][variant])
             data = {

@@ -8,33 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .figures import LABELS as _LABELS
+from .figures import alpha_keys as _alpha_keys
+from .figures import collect as _collect
+from .figures import plot_ase, plot_errors, plot_maps
 from .pipeline import ERROR_NAMES, VARIANTS
+from .statistics import DEFAULT_UNIT, paired_csv, paired_statistics, tidy_csv, tidy_rows
 from .store import atomic_write_text
 
-__all__ = ["summarize", "summary_markdown", "write_report"]
-
-_LABELS = {
-    "midpoint_distance": "Midpoint distance",
-    "centrality": "Centrality",
-    "involutivity": "Involutivity",
-    "transvectivity": "Transvectivity",
-    "ase": "Area strain error (pole ladder)",
-}
-
-
-def _alpha_keys(results: list[dict]) -> list[str]:
-    keys = list(results[0]["alpha2"].keys())
-    return sorted(keys, key=float)
-
-
-def _collect(results: list[dict], key: str, path: tuple) -> np.ndarray:
-    values = []
-    for r in results:
-        node = r["alpha2"][key]
-        for p in path:
-            node = node[p]
-        values.append(float(node))
-    return np.asarray(values)
+__all__ = ["summarize", "summary_markdown", "paired_markdown", "failures_markdown", "write_report"]
 
 
 def summarize(results: list[dict]) -> list[dict]:
@@ -55,6 +37,8 @@ def summarize(results: list[dict]) -> list[dict]:
         ]
         for name, path, variant in measures:
             vals = _collect(results, key, path)
+            if vals.size == 0:
+                continue  # every subject failed at this alpha^2
             rows.append(
                 {
                     "alpha2": float(key),
@@ -76,7 +60,11 @@ def summary_csv(rows: list[dict]) -> str:
     return buf.getvalue()
 
 
-def summary_markdown(rows: list[dict], unit: str = "mm") -> str:
+def _cell(get: dict, key: tuple) -> str:
+    return f"{get[key]:.3g}" if key in get else "n/a"
+
+
+def summary_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
     """A Table-1-style Markdown table: mean errors per ``alpha^2``, residual vs no residual."""
     alphas = sorted({r["alpha2"] for r in rows})
     get = {(r["alpha2"], r["measure"], r["variant"]): r["mean"] for r in rows}
@@ -88,7 +76,7 @@ def summary_markdown(rows: list[dict], unit: str = "mm") -> str:
     for name in (*ERROR_NAMES, "ase"):
         cells = []
         for a in alphas:
-            cells += [f"{get[(a, name, v)]:.3g}" for v in VARIANTS]
+            cells += [_cell(get, (a, name, v)) for v in VARIANTS]
         lines.append(f"| {_LABELS[name]} | " + " | ".join(cells) + " |")
     single = [("ase", "fanning", "Area strain error (fanning)")]
     single += [
@@ -102,127 +90,107 @@ def summary_markdown(rows: list[dict], unit: str = "mm") -> str:
     for name, variant, label in single:
         cells = []
         for a in alphas:  # one value per alpha^2, shared by both variants
-            cells += [f"{get[(a, name, variant)]:.3g}", ""]
+            cells += [_cell(get, (a, name, variant)), ""]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
-def _plot_errors(results, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    keys = _alpha_keys(results)
-    fig, axes = plt.subplots(2, 2, figsize=(11, 8))
-    colors = {"residual": "tab:blue", "no_residual": "tab:orange"}
-    for ax, name in zip(axes.ravel(), ERROR_NAMES, strict=True):
-        for j, variant in enumerate(VARIANTS):
-            data = [np.maximum(_collect(results, k, (variant, name)), 1e-16) for k in keys]
-            pos = np.arange(len(keys)) * 3 + j
-            bp = ax.boxplot(data, positions=pos, widths=0.8, patch_artist=True, showfliers=True)
-            for patch in bp["boxes"]:
-                patch.set_facecolor(colors[variant])
-                patch.set_alpha(0.6)
-        ax.set_xticks(np.arange(len(keys)) * 3 + 0.5)
-        ax.set_xticklabels([f"{float(k):g}" for k in keys])
-        ax.set_yscale("log")
-        ax.set_title(_LABELS[name])
-        ax.set_xlabel("alpha²")
-        ax.set_ylabel("error (mm)")
-        ax.grid(True, axis="y", alpha=0.3)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=c, alpha=0.6) for c in colors.values()]
-    fig.legend(handles, ["with residuals", "without residuals"], loc="upper center", ncol=2)
-    fig.tight_layout(rect=(0, 0, 1, 0.96))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def _fmt(v, spec: str) -> str:
+    return "n/a" if v is None else format(v, spec)
 
 
-def _plot_ase(results, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    keys = _alpha_keys(results)
-    x = np.array([float(k) for k in keys])
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
-    series = {
-        "pole ladder, residuals": ("residual", "ase"),
-        "pole ladder, no residuals": ("no_residual", "ase"),
-        "fanning scheme": ("fanning", "ase"),
-    }
-    for label, p in series.items():
-        vals = np.array([_collect(results, k, p) for k in keys])
-        mean, std = vals.mean(axis=1), vals.std(axis=1)
-        ax.errorbar(x, mean, yerr=std, marker="o", capsize=3, label=label)
-    ax.set_xscale("log")
-    ax.set_xlabel("alpha²")
-    ax.set_ylabel("ASE (area strain error)")
-    ax.legend()
-    ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def _plot_maps(result: dict, atlas, subject_ed, faces, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    keys = _alpha_keys([result])
-    key = min(keys, key=lambda k: abs(np.log(float(k))))  # closest to alpha^2 = 1
-    las = result["alpha2"][key]["las"]
-    panels = [
-        ("S - S' on S (subject)", subject_ed, las["subject"]),
-        ("T - T' on T, pole ladder, residuals", atlas, las["residual"]),
-        ("T - T' on T, pole ladder, no residuals", atlas, las["no_residual"]),
-        ("T - T' on T, fanning scheme", atlas, las["fanning"]),
+def paired_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
+    """The paired comparison residual vs no residual as a Markdown table."""
+    lines = [
+        "Paired comparison, with residuals minus without, per subject "
+        f"(differences in {unit}; the ASE is dimensionless).",
+        "",
+        "| α² | Error | n | Residual lower | Median difference | 95 % bootstrap CI "
+        "| Wilcoxon p | Note |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    values = np.concatenate([np.asarray(p[2]) for p in panels])
-    lo, hi = np.percentile(values, [2, 98])
-    fig = plt.figure(figsize=(10, 9))
-    surf = None
-    for i, (title, verts, vals) in enumerate(panels):
-        ax = fig.add_subplot(2, 2, i + 1, projection="3d")
-        face_vals = np.asarray(vals)[np.asarray(faces)].mean(axis=1)
-        surf = ax.plot_trisurf(
-            verts[:, 0], verts[:, 1], verts[:, 2], triangles=faces, cmap="viridis", linewidth=0
+    for r in rows:
+        frac = (
+            "n/a"
+            if r["fraction_residual_lower"] is None
+            else (f"{r['fraction_residual_lower']:.0%}")
         )
-        surf.set_array(face_vals)
-        surf.set_clim(lo, hi)
-        ax.set_box_aspect(np.ptp(verts, axis=0))
-        ax.view_init(elev=15, azim=-60)
-        ax.set_title(title, fontsize=10)
-        ax.set_axis_off()
-    fig.colorbar(surf, ax=fig.axes, shrink=0.5, label="local area strain (a - a') / a")
-    fig.suptitle(f"Area strain maps, subject {result['subject']}, alpha² = {float(key):g}")
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+        ci = f"[{_fmt(r['ci_low'], '.3g')}, {_fmt(r['ci_high'], '.3g')}]"
+        lines.append(
+            f"| {r['alpha2']:g} | {_LABELS[r['measure']]} | {r['n']} | {frac} | "
+            f"{_fmt(r['median_difference'], '.3g')} | {ci} | {_fmt(r['wilcoxon_p'], '.3g')} "
+            f"| {r['note']} |"
+        )
+    return "\n".join(lines) + "\n"
 
 
-def write_report(results: list[dict], output, atlas, faces, map_subject_ed=None) -> dict:
-    """Write ``summary.csv``, ``summary.md`` and the figures; return their paths.
+def failures_markdown(results: list[dict]) -> str:
+    """The failed (subject, alpha^2) pairs with their error, or an empty string."""
+    failed = [(r["subject"], a, e) for r in results for a, e in r.get("failed", {}).items()]
+    if not failed:
+        return ""
+    subjects = len({f[0] for f in failed})
+    lines = [f"{len(failed)} pair(s) of {subjects} subject(s) failed (left out above):", ""]
+    lines += [f"- {name}, α² = {float(a):g}: {err}" for name, a, err in failed]
+    return "\n".join(lines) + "\n"
+
+
+def write_report(
+    results: list[dict], output, atlas, faces, map_subject_ed=None, unit: str | None = None
+) -> dict:
+    """Write the tables and figures of the study; return their paths.
+
+    Files: ``summary.csv`` (mean, std per ``alpha^2``, measure, variant),
+    ``results.csv`` (tidy, one row per subject, ``alpha^2``, variant and
+    measure), ``paired_statistics.csv``, ``summary.md`` (Table 1, the paired
+    comparison, the failures) and the figures ``fig4_symmetry_errors.png``,
+    ``fig5a_area_strain_error.png``, ``fig5b_area_strain_maps.png``.
 
     Parameters
     ----------
-    results : list of per-subject result dicts (from :func:`ladders.study.run_subject`)
+    results : list of per-subject result dicts (:attr:`ladders.study.runner.StudyOutcome.results`)
     output : path of the results folder
     atlas : array (k, 3); faces : int array (f, 3)
     map_subject_ed : array (k, 3), optional
         End-diastole mesh of the first subject, for the area strain maps.
+    unit : str, optional
+        Unit of the distances; default: the results' ``unit`` field, else ``"mm"``.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     output = Path(output)
-    rows = summarize(results)
-    paths = {
-        "summary_csv": output / "summary.csv",
-        "summary_md": output / "summary.md",
-        "errors_png": output / "fig4_symmetry_errors.png",
-        "ase_png": output / "fig5a_area_strain_error.png",
-    }
+    ok = [r for r in results if r["alpha2"]]
+    paths = {k: output / v for k, v in _FILES.items()}
+    if not ok:  # every pair failed: only the list of failures
+        atomic_write_text(paths["summary_md"], failures_markdown(results))
+        return {"summary_md": paths["summary_md"]}
+    tidy = tidy_rows(results, unit)
+    unit = unit or next(row["unit"] for row in tidy if row["measure"] == "centrality")
+    rows, paired = summarize(results), paired_statistics(results, seed=0)
+    text = summary_markdown(rows, unit) + "\n" + paired_markdown(paired, unit)
+    if failures_markdown(results):
+        text += "\n" + failures_markdown(results)
     atomic_write_text(paths["summary_csv"], summary_csv(rows))
-    atomic_write_text(paths["summary_md"], summary_markdown(rows))
-    _plot_errors(results, paths["errors_png"])
-    _plot_ase(results, paths["ase_png"])
-    if map_subject_ed is not None:
+    atomic_write_text(paths["results_csv"], tidy_csv(tidy))
+    atomic_write_text(paths["paired_csv"], paired_csv(paired))
+    atomic_write_text(paths["summary_md"], text)
+    plot_errors(ok, paths["errors_png"], unit)
+    plot_ase(ok, paths["ase_png"])
+    if map_subject_ed is not None and results[0]["alpha2"]:
         paths["maps_png"] = output / "fig5b_area_strain_maps.png"
-        _plot_maps(
-            results[0], np.asarray(atlas), np.asarray(map_subject_ed), faces, paths["maps_png"]
-        )
+        plot_maps(
+            results[0], np.asarray(atlas), np.asarray(map_subject_ed), faces,
+            paths["maps_png"], len(ok),
+        )  # fmt: skip
     return paths
+
+
+_FILES = {
+    "summary_csv": "summary.csv",
+    "results_csv": "results.csv",
+    "paired_csv": "paired_statistics.csv",
+    "summary_md": "summary.md",
+    "errors_png": "fig4_symmetry_errors.png",
+    "ase_png": "fig5a_area_strain_error.png",
+}

@@ -1,52 +1,265 @@
-"""Running the study over a cohort: parallel subjects, resumable, with a manifest."""
+"""Running the study over a cohort: parallel subjects, resumable per (subject, alpha^2)."""
 
 from __future__ import annotations
 
 import json
-import platform
+import sys
 import time
-from dataclasses import dataclass
+import traceback
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .cohort import Subject
-from .mesh_outputs import write_subject_meshes
-from .pipeline import StudyConfig, run_subject
-from .store import SubjectStore, array_digest, atomic_write_text, config_hash
+from manifolds.errors import ConvergenceWarning
+from manifolds.lddmm.kernels import GaussianKernel
 
-__all__ = ["StudyOutcome", "run_study"]
+from .area_strain import area_strain
+from .cohort import CohortError, Subject
+from .mesh_outputs import write_subject_meshes
+from .pipeline import StudyConfig, _one_alpha
+from .provenance import write_manifest
+from .store import (
+    PairStore,
+    array_digest,
+    atomic_write_text,
+    config_hash,
+    missing_fields,
+    validate_subject_name,
+)
+
+__all__ = ["StudyOutcome", "run_study", "compute_pair", "configuration_id", "mesh_files"]
+
+_CLAIM_POLL_S = 0.5  # how often a run checks pairs claimed by another run
 
 
 @dataclass
 class StudyOutcome:
-    """What :func:`run_study` returns: per-subject results and where they are."""
+    """What :func:`run_study` returns.
+
+    Attributes
+    ----------
+    output : Path
+        The results folder.
+    results : list of dict
+        Per subject (in the cohort's order): ``subject``, ``alpha2`` (the
+        successful pair results keyed by ``str(alpha2)``), ``failed`` (error
+        message per ``str(alpha2)``), ``non_converged_registrations``, ``seconds``.
+    computed, skipped : list of (str, float)
+        Pairs computed by this run / reused from earlier (or concurrent) runs.
+    seconds : float
+        Wall time of this run.
+    failures : list of dict
+        ``subject``, ``alpha2``, ``error`` of every pair that raised.
+    config_id : str
+        Folder of this configuration under ``output/results/``.
+    """
 
     output: Path
     results: list
     computed: list
     skipped: list
     seconds: float
+    failures: list = field(default_factory=list)
+    config_id: str = ""
+
+    @property
+    def n_failed_subjects(self) -> int:
+        """Number of subjects with at least one failed pair."""
+        return len({f["subject"] for f in self.failures})
 
 
-def _version() -> str:
-    try:
-        from importlib.metadata import version
+def configuration_id(config: StudyConfig, atlas, faces) -> tuple[str, dict]:
+    """Hash (and content) of what the results depend on besides alpha^2 and the subject.
 
-        return version("symladders")
-    except Exception:  # pragma: no cover - not installed as a distribution
-        return "unknown"
-
-
-def _params(config: StudyConfig, atlas, faces) -> dict:
-    """Everything the results depend on besides the subject's own meshes."""
+    The kernel backend is left out: both backends compute the same sums (tested
+    to ~1e-11).
+    """
     cfg = config.as_dict()
-    cfg.pop("kernel_backend")  # both backends compute the same sums (tested to ~1e-11)
-    return {"config": cfg, "atlas": array_digest(atlas), "faces": array_digest(faces)}
+    cfg.pop("kernel_backend")
+    cfg.pop("alpha2")
+    shared = {"config": cfg, "atlas": array_digest(atlas), "faces": array_digest(faces)}
+    return config_hash(shared), shared
 
 
-def _subject_hash(params: dict, subject: Subject) -> str:
-    return config_hash({**params, "ed": array_digest(subject.ed), "es": array_digest(subject.es)})
+#: Suffixes of mesh files whose hashes :func:`mesh_files` collects for the manifest.
+MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu", ".vtp")
+
+
+def mesh_files(folder) -> list[Path]:
+    """Mesh files under ``folder`` (recursively, sorted), for the manifest's hashes."""
+    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() in MESH_SUFFIXES)
+
+
+def _pair_hash(config_id: str, subject: Subject, alpha2: float) -> str:
+    ed, es = array_digest(subject.ed), array_digest(subject.es)
+    return config_hash({"config": config_id, "alpha2": float(alpha2), "ed": ed, "es": es})
+
+
+def compute_pair(
+    config: StudyConfig, atlas, faces, subject: Subject, alpha2: float, meshes=None
+) -> dict:
+    """The results of one subject at one ``alpha^2`` (a JSON-ready dict, ``status: "ok"``).
+
+    With ``meshes`` (a folder) the pair's shapes and strain maps are written
+    there as ``.vtu`` files (:func:`ladders.study.mesh_outputs.write_subject_meshes`).
+
+    Registrations stopped by the iteration limit are counted in
+    ``non_converged_registrations`` rather than warned once per call. The count
+    is taken from the warnings, whose capture is process-wide: with a
+    thread-based backend (Dask workers with several threads) concurrent pairs
+    may count one another's warnings, so it is exact only with process workers.
+    """
+    start = time.perf_counter()
+    las_subject = area_strain(subject.ed, subject.es, faces)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConvergenceWarning)
+        shapes = {} if meshes is not None else None
+        out = _one_alpha(config, atlas, faces, subject, float(alpha2), las_subject, shapes)
+    if meshes is not None:
+        key = str(float(alpha2))
+        write_subject_meshes(
+            meshes, subject, atlas, faces, {"alpha2": {key: out}, "shapes": {key: shapes}}
+        )
+    for w in caught:
+        if not issubclass(w.category, ConvergenceWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    out["status"] = "ok"
+    out["non_converged_registrations"] = sum(
+        issubclass(w.category, ConvergenceWarning) for w in caught
+    )
+    out["kernel_backend"] = GaussianKernel(config.sigma, backend=config.kernel_backend).backend
+    out["seconds"] = time.perf_counter() - start
+    return out
+
+
+def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> dict:
+    """:func:`compute_pair`, with any exception recorded as a failed result."""
+    start = time.perf_counter()
+    try:
+        out = compute_pair(config, atlas, faces, subject, alpha2, meshes)
+    except Exception as exc:  # a failing subject must not stop the others
+        error, trace = f"{type(exc).__name__}: {exc}", traceback.format_exc()
+    else:
+        missing = missing_fields(out)
+        if not missing:
+            return out
+        error, trace = f"incomplete result, missing or non-finite: {', '.join(missing)}", ""
+    return {
+        "status": "failed",
+        "error": error,
+        "traceback": trace,
+        "seconds": time.perf_counter() - start,
+    }
+
+
+def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshes=None) -> dict:
+    """Worker: compute the subject's pairs it can claim; each is stored as it finishes."""
+    report = {"subject": subject.name, "computed": [], "busy": []}
+    for a2 in alphas:
+        if not store.claim(subject.name, a2):
+            report["busy"].append(a2)  # another run is computing it
+            continue
+        finished = store.load(subject.name, a2, _pair_hash(config_id, subject, a2))
+        if finished is not None and finished["status"] == "ok":
+            store.release(subject.name, a2)  # another run finished it meanwhile
+            continue
+        try:
+            result = _attempt(config, atlas, faces, subject, a2, meshes)
+            store.save(subject.name, a2, _pair_hash(config_id, subject, a2), result)
+        finally:
+            store.release(subject.name, a2)
+        report["computed"].append(a2)
+    return report
+
+
+def _run_parallel(tasks, jobs: int, progress: bool) -> list[dict]:
+    from joblib import Parallel, delayed
+    from tqdm.auto import tqdm
+
+    reports = []
+    if not tasks:
+        return reports
+    runner = Parallel(n_jobs=jobs, return_as="generator_unordered")
+    bar = tqdm(total=len(tasks), desc="subjects", disable=not progress, unit="subject")
+    try:
+        for rep in runner(delayed(_subject_task)(*t) for t in tasks):
+            reports.append(rep)
+            bar.update(1)
+    finally:
+        bar.close()
+    return reports
+
+
+def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id, meshes) -> list:
+    """Wait for pairs claimed by other runs; take over those whose holder died."""
+    busy, taken_over = list(busy), []
+    if busy:
+        print(
+            f"waiting for {len(busy)} (subject, alpha^2) pair(s) claimed by another run",
+            file=sys.stderr,
+        )
+    while busy:
+        left = []
+        for name, a2 in busy:
+            subject = by_name[name]
+            if store.load(name, a2, _pair_hash(config_id, subject, a2)) is not None:
+                continue
+            if store.claim_is_stale(name, a2):
+                rep = _subject_task(config, atlas, faces, subject, [a2], store, config_id, meshes)
+                taken_over += [(name, a) for a in rep["computed"]]
+                left += [(name, a) for a in rep["busy"]]
+            else:
+                left.append((name, a2))
+        busy = left
+        if busy:
+            time.sleep(_CLAIM_POLL_S)
+    return taken_over
+
+
+def _collect(subjects, alphas, store, config_id) -> tuple[list, list]:
+    """Per-subject result dicts of the pairs in the sweep, and the failures."""
+    results, failures = [], []
+    for s in subjects:
+        entry = {"subject": s.name, "alpha2": {}, "failed": {}}
+        for a2 in alphas:
+            data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
+            if data is None:
+                raise RuntimeError(f"result of subject {s.name!r} at alpha2={a2:g} missing")
+            if data["status"] == "ok":
+                entry["alpha2"][str(float(a2))] = data
+            else:
+                entry["failed"][str(float(a2))] = data["error"]
+                failures.append({"subject": s.name, "alpha2": float(a2), "error": data["error"]})
+        ok = entry["alpha2"].values()
+        entry["non_converged_registrations"] = int(
+            sum(d["non_converged_registrations"] for d in ok)
+        )
+        entry["seconds"] = float(sum(d["seconds"] for d in ok))
+        results.append(entry)
+    return results, failures
+
+
+def _pending(subjects, alphas, store, config_id) -> list[tuple[Subject, list[float]]]:
+    """Per subject, the alpha^2 without a successful stored result (subjects with none left out)."""
+    out = []
+    for s in subjects:
+        todo = []
+        for a2 in alphas:
+            data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
+            if data is None or data["status"] != "ok":
+                todo.append(a2)
+        if todo:
+            out.append((s, todo))
+    return out
+
+
+def _check_subjects(subjects) -> None:
+    names = [validate_subject_name(s.name) for s in subjects]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise CohortError(f"subjects: subject names must be unique, repeated: {dup}")
 
 
 def run_study(
@@ -58,9 +271,10 @@ def run_study(
     jobs: int = 1,
     progress: bool = True,
     data_description: dict | None = None,
+    input_files: list | None = None,
     meshes: bool = True,
 ) -> StudyOutcome:
-    """Run (or resume) the study and write per-subject results and a manifest.
+    """Run (or resume) the study; write per-(subject, alpha^2) results and a manifest.
 
     Parameters
     ----------
@@ -70,9 +284,12 @@ def run_study(
     faces : int array, shape (f, 3)
         Triangles shared by all meshes (vertex correspondence).
     subjects : list of Subject
+        Names must be plain file names (no path separator, not ``..``).
     output : path
-        Results folder; ``subjects/<name>.json`` are written atomically as
-        each subject finishes, so an interrupted run loses no finished subject.
+        Results folder; each pair is stored as soon as it finishes (layout:
+        :mod:`ladders.study.store`). Rerunning resumes; extending the alpha^2 sweep
+        computes only the new pairs; other settings go to another folder. A
+        pair that raised is stored with its error and retried on the next run.
     jobs : int
         Parallel workers (joblib); ``-1`` uses all cores. Inside a
         ``joblib.parallel_config(backend="dask")`` block the subjects run on
@@ -80,70 +297,42 @@ def run_study(
     progress : bool
         Show a progress bar (tqdm).
     data_description : dict, optional
-        Recorded in the manifest (e.g. the cohort generator's parameters).
-    meshes : bool
-        Write each computed subject's shapes and strain maps as ``.vtu`` files
-        under ``output/meshes`` (see :mod:`ladders.study.mesh_outputs`).
+        Recorded in the manifest (e.g. the cohort generator's parameters, ``seed``).
+    input_files : list of path, optional
+        Mesh files the cohort was read from; their SHA-256 go into the manifest.
+    meshes : bool, default True
+        Write each computed pair's shapes and strain maps as ``.vtu`` files under
+        ``output/meshes/<config>`` (:mod:`ladders.study.mesh_outputs`).
 
     Returns
     -------
     StudyOutcome
     """
-    from joblib import Parallel, delayed
-    from tqdm.auto import tqdm
-
     start = time.perf_counter()
+    _check_subjects(subjects)
     output = Path(output)
     output.mkdir(parents=True, exist_ok=True)
-    params = _params(config, atlas, faces)
-    stores = {s.name: SubjectStore(output, _subject_hash(params, s)) for s in subjects}
-    names = [s.name for s in subjects]
-    if len(set(names)) != len(names):
-        raise ValueError("subjects: subject names must be unique")
-    todo = [s for s in subjects if stores[s.name].load(s.name) is None]
-    skipped = [s.name for s in subjects if s not in todo]
-
-    def task(subject):
-        result = run_subject(config, atlas, faces, subject, keep_shapes=meshes)
-        if meshes:
-            write_subject_meshes(output / "meshes", subject, atlas, faces, result)
-        stores[subject.name].save(subject.name, result)  # written by the worker itself
-        return subject.name
-
-    computed = []
-    if todo:
-        runner = Parallel(n_jobs=jobs, return_as="generator_unordered")
-        bar = tqdm(total=len(todo), desc="subjects", disable=not progress, unit="subject")
-        try:
-            for name in runner(delayed(task)(s) for s in todo):
-                computed.append(name)
-                bar.update(1)
-        finally:
-            bar.close()
-    results = [stores[s.name].load(s.name) for s in subjects]
-    missing = [s.name for s, r in zip(subjects, results, strict=True) if r is None]
-    if missing:
-        raise RuntimeError(f"results missing after the run for subjects {missing}")
-    seconds = time.perf_counter() - start
-    manifest = {
-        "library_version": _version(),
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "config": config.as_dict(),
-        "data": data_description or {},
-        "n_subjects": len(subjects),
-        "n_vertices": int(np.asarray(atlas).shape[0]),
-        "n_faces": int(np.asarray(faces).shape[0]),
-        "jobs": jobs,
-        "computed_this_run": len(computed),
-        "resumed_from_previous_runs": len(skipped),
-        "wall_time_this_run_s": seconds,
-        "subject_time_total_s": float(sum(r["seconds"] for r in results)),
-        "registrations": int(
-            sum(a["n_registrations"] for r in results for a in r["alpha2"].values())
-        ),
-        "non_converged_registrations": int(sum(r["non_converged_registrations"] for r in results)),
-        "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-    }
-    atomic_write_text(output / "manifest.json", json.dumps(manifest, indent=2))
-    return StudyOutcome(output, results, computed, skipped, seconds)
+    config_id, shared = configuration_id(config, atlas, faces)
+    store = PairStore(output, config_id)
+    atomic_write_text(store.root / "config.json", json.dumps(shared, indent=2))
+    alphas = [float(a) for a in config.alpha2]
+    by_name = {s.name: s for s in subjects}
+    mesh_folder = output / "meshes" / config_id if meshes else None
+    tasks = [
+        (config, atlas, faces, s, todo, store, config_id, mesh_folder)
+        for s, todo in _pending(subjects, alphas, store, config_id)
+    ]
+    reports = _run_parallel(tasks, jobs, progress)
+    computed = [(r["subject"], a) for r in reports for a in r["computed"]]
+    busy = [(r["subject"], a) for r in reports for a in r["busy"]]
+    computed += _wait_for_other_runs(
+        busy, by_name, store, config, atlas, faces, config_id, mesh_folder
+    )
+    results, failures = _collect(subjects, alphas, store, config_id)
+    done_now = set(computed)
+    skipped = [(s.name, a) for s in subjects for a in alphas if (s.name, a) not in done_now]
+    outcome = StudyOutcome(
+        output, results, computed, skipped, time.perf_counter() - start, failures, config_id
+    )
+    write_manifest(outcome, config, atlas, faces, jobs, data_description or {}, input_files or [])
+    return outcome

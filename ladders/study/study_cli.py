@@ -41,8 +41,8 @@ def add_study_parser(sub) -> None:
             f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)} by default; --full gives the paper's "
             f"setting: {FULL_SUBJECTS} subjects and alpha^2 in "
             f"{','.join(f'{a:g}' for a in FULL_ALPHA2)}). Results are written per subject as "
-            "they finish; rerunning with the same output folder resumes and skips finished "
-            "subjects."
+            "they finish; rerunning with the same output folder resumes and computes only the "
+            "missing (subject, alpha^2) pairs."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
@@ -188,6 +188,34 @@ def _backend(args):
         client.close()
 
 
+def _note_pairs_without_meshes(outcome) -> None:
+    """Tell which resumed pairs have no mesh files (they were computed with --no-meshes)."""
+    from .mesh_outputs import alpha_folder
+
+    root = Path(outcome.output) / "meshes" / outcome.config_id
+    bare = [(n, a) for n, a in outcome.skipped if not (root / n / alpha_folder(a)).is_dir()]
+    if bare:
+        print(
+            f"note: {len(bare)} skipped (subject, alpha^2) pair(s) have no mesh files (computed "
+            f"with --no-meshes); delete their files under {Path(outcome.output) / 'results'} "
+            "to compute them again with meshes"
+        )
+
+
+def _input_files(args) -> list | None:
+    """Files the cohort was read from (hashed into the manifest); ``None`` for the built-in one."""
+    from .runner import mesh_files
+
+    files = []
+    if args.meshes is not None:
+        files += mesh_files(args.meshes)
+    if args.cohort is not None:
+        files += [Path(args.cohort), *mesh_files(Path(args.cohort).parent)]
+    if args.atlas is not None:
+        files.append(Path(args.atlas))
+    return sorted({Path(f).resolve() for f in files}) or None
+
+
 def run_study_command(args) -> int:
     """Run the study from parsed command-line arguments."""
     from .pipeline import StudyConfig
@@ -223,15 +251,12 @@ def run_study_command(args) -> int:
             progress=not args.no_progress,
             data_description=description,
             meshes=not args.no_meshes,
+            input_files=_input_files(args),
         )
     if outcome.skipped:
-        print(f"resumed: {len(outcome.skipped)} subject(s) already finished were skipped")
-        bare = [n for n in outcome.skipped if not (Path(args.output) / "meshes" / n).is_dir()]
-        if bare and not args.no_meshes:
-            print(
-                f"note: {len(bare)} skipped subject(s) have no mesh files (computed with "
-                "--no-meshes); delete their subjects/<name>.json to compute them with meshes"
-            )
+        print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
+        if not args.no_meshes:
+            _note_pairs_without_meshes(outcome)
     paths = write_report(
         outcome.results, args.output, cohort.atlas, cohort.faces, cohort.subjects[0].ed
     )
@@ -245,4 +270,11 @@ def run_study_command(args) -> int:
     )
     print("Files:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
     print(f"Total wall time {time.perf_counter() - start:.1f} s")
+    if outcome.failures:
+        print(
+            f"symladders study: {outcome.n_failed_subjects} subject(s) failed "
+            f"({len(outcome.failures)} pair(s)); errors in summary.md and the result files",
+            file=sys.stderr,
+        )
+        return 1
     return 0

@@ -1,0 +1,184 @@
+"""Per-subject results as a tidy table, and the paired comparison residual vs no residual."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+
+import numpy as np
+
+from .pipeline import ERROR_NAMES
+
+__all__ = [
+    "DEFAULT_UNIT",
+    "MEASURES",
+    "tidy_rows",
+    "tidy_csv",
+    "paired_comparison",
+    "paired_statistics",
+    "paired_csv",
+]
+
+#: Unit of the distances when the results do not carry one.
+DEFAULT_UNIT = "mm"
+
+#: Measures of the tidy table, in order.
+MEASURES = (*ERROR_NAMES, "ase", "registration_error", "registration_norm",
+            "inverse_consistency", "converged")  # fmt: skip
+
+_SHARED = {  # measures of the registration T -> S, shared by both variants
+    "registration_error": ("registration_error",),
+    "registration_norm": ("registration_norm", "rkhs_norm"),
+    "inverse_consistency": ("inverse_consistency",),
+    "converged": ("converged",),
+}
+_FIXED_UNITS = {"ase": "1", "converged": "bool", "registration_norm": "rkhs"}
+
+
+def _unit(pair: dict, measure: str, unit: str | None) -> str:
+    """Unit of a measure: given, else recorded in the result, else :data:`DEFAULT_UNIT`."""
+    units = pair.get("units")
+    if isinstance(units, dict) and measure in units:
+        return str(units[measure])
+    if measure in _FIXED_UNITS:
+        return _FIXED_UNITS[measure]
+    return unit or str(pair.get("unit", DEFAULT_UNIT))
+
+
+def _shared_value(pair: dict, measure: str):
+    for key in _SHARED[measure]:
+        if key in pair:
+            return pair[key]
+    raise KeyError(f"result has none of {_SHARED[measure]}")
+
+
+def tidy_rows(results: list[dict], unit: str | None = None) -> list[dict]:
+    """One row per ``(subject, alpha2, variant, measure)``.
+
+    Variants ``residual`` and ``no_residual`` carry the four errors and the ASE
+    of the pole ladder, and the measures of the registration ``T -> S``
+    (the same values in both, since the registration is shared); ``fanning``
+    carries its ASE. ``converged`` is 1.0 or 0.0.
+
+    Parameters
+    ----------
+    results : list of dict
+        Per-subject results (:attr:`ladders.study.runner.StudyOutcome.results`).
+    unit : str, optional
+        Unit of the distances; default: the results' ``unit`` field, else
+        :data:`DEFAULT_UNIT`.
+    """
+    rows = []
+    for r in results:
+        for key in sorted(r["alpha2"], key=float):
+            pair = r["alpha2"][key]
+            for variant in ("residual", "no_residual", "fanning"):
+                names = ("ase",) if variant == "fanning" else MEASURES
+                for m in names:
+                    value = (
+                        pair[variant][m] if m in (*ERROR_NAMES, "ase") else _shared_value(pair, m)
+                    )
+                    rows.append(
+                        {
+                            "subject": r["subject"],
+                            "alpha2": float(key),
+                            "variant": variant,
+                            "measure": m,
+                            "value": float(value),
+                            "unit": _unit(pair, m, unit),
+                        }
+                    )
+    return rows
+
+
+def tidy_csv(rows: list[dict]) -> str:
+    """The rows of :func:`tidy_rows` as CSV text."""
+    buf = io.StringIO()
+    fields = ["subject", "alpha2", "variant", "measure", "value", "unit"]
+    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({**row, "value": repr(row["value"])} for row in rows)
+    return buf.getvalue()
+
+
+def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: int = 2000) -> dict:
+    """Paired comparison of two samples (``residual - no_residual`` per subject).
+
+    Parameters
+    ----------
+    residual, no_residual : array, shape (n,)
+        The same error for the same subjects, with and without residuals.
+    rng : numpy.random.Generator
+        Draws the bootstrap resamples.
+    n_boot : int
+        Bootstrap resamples of the median difference.
+
+    Returns
+    -------
+    dict
+        ``n``; ``fraction_residual_lower`` (share of subjects with a strictly
+        lower error with residuals); ``median_difference`` and its 95 %
+        percentile-bootstrap interval ``ci_low``, ``ci_high``; ``wilcoxon_p``
+        (two-sided signed-rank test, exact for small samples) with ``note``
+        explaining a missing value (no subject; all differences zero gives p = 1).
+        Values that cannot be computed are ``None``, never NaN.
+    """
+    a, b = np.asarray(residual, dtype=float), np.asarray(no_residual, dtype=float)
+    if a.shape != b.shape or a.ndim != 1:
+        raise ValueError(
+            f"residual, no_residual: expected two 1-d arrays of one length, got shapes "
+            f"{a.shape} and {b.shape}"
+        )
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise ValueError("residual, no_residual: expected finite values, got NaN or inf")
+    d = a - b
+    out = {"n": int(d.size), "fraction_residual_lower": None, "median_difference": None,
+           "ci_low": None, "ci_high": None, "wilcoxon_p": None, "note": ""}  # fmt: skip
+    if d.size == 0:
+        out["note"] = "no subject"
+        return out
+    out["fraction_residual_lower"] = float(np.mean(d < 0))
+    out["median_difference"] = float(np.median(d))
+    boot = np.median(d[rng.integers(0, d.size, size=(n_boot, d.size))], axis=1)
+    out["ci_low"], out["ci_high"] = (float(v) for v in np.percentile(boot, [2.5, 97.5]))
+    if np.all(d == 0):
+        out["wilcoxon_p"], out["note"] = 1.0, "all differences zero"
+        return out
+    from scipy.stats import wilcoxon
+
+    p = float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
+    out["wilcoxon_p"] = p if math.isfinite(p) else None
+    if d.size < 6:
+        out["note"] = f"n = {d.size}: p cannot fall below {2.0 ** (1 - np.count_nonzero(d)):.3g}"
+    return out
+
+
+def paired_statistics(results: list[dict], seed: int = 0, n_boot: int = 2000) -> list[dict]:
+    """:func:`paired_comparison` per ``alpha^2`` and error (the four errors and the ASE).
+
+    Subjects without a result at an ``alpha^2`` (failed) are left out of that ``alpha^2``.
+    The bootstrap uses ``numpy.random.default_rng(seed)``.
+    """
+    rng = np.random.default_rng(seed)
+    keys = sorted({k for r in results for k in r["alpha2"]}, key=float)
+    rows = []
+    for key in keys:
+        pairs = [r["alpha2"][key] for r in results if key in r["alpha2"]]
+        for name in (*ERROR_NAMES, "ase"):
+            res = [p["residual"][name] for p in pairs]
+            nores = [p["no_residual"][name] for p in pairs]
+            stats = paired_comparison(res, nores, rng, n_boot=n_boot)
+            rows.append({"alpha2": float(key), "measure": name, **stats})
+    return rows
+
+
+def paired_csv(rows: list[dict]) -> str:
+    """The rows of :func:`paired_statistics` as CSV text (``None`` as an empty cell)."""
+    buf = io.StringIO()
+    fields = ["alpha2", "measure", "n", "fraction_residual_lower", "median_difference",
+              "ci_low", "ci_high", "wilcoxon_p", "note"]  # fmt: skip
+    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: ("" if v is None else v) for k, v in row.items()} for row in rows)
+    return buf.getvalue()

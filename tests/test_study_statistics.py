@@ -1,0 +1,108 @@
+"""Tidy per-subject table and the paired comparison residual vs no residual."""
+
+import csv
+import io
+
+import numpy as np
+import pytest
+
+from ladders.study.statistics import (
+    MEASURES,
+    paired_comparison,
+    paired_csv,
+    paired_statistics,
+    tidy_csv,
+    tidy_rows,
+)
+
+
+def _pair(shift: float, unit=None) -> dict:
+    errs = {m: 1.0 + shift for m in ("midpoint_distance", "centrality", "involutivity")}
+    pair = {
+        "residual": {**errs, "transvectivity": 2.0, "ase": 0.1},
+        "no_residual": {**{m: 3.0 + shift for m in errs}, "transvectivity": 2.0, "ase": 0.3},
+        "fanning": {"ase": 0.2},
+        "registration_error": 4.0,
+        "rkhs_norm": 5.0,
+        "inverse_consistency": 0.5,
+        "converged": True,
+    }
+    if unit:
+        pair["unit"] = unit
+    return pair
+
+
+def _results(n=3, unit=None):
+    return [
+        {"subject": f"s{i}", "alpha2": {"1.0": _pair(i, unit), "10.0": _pair(-0.5 * i, unit)}}
+        for i in range(n)
+    ]
+
+
+def test_tidy_table_columns_rows_and_units():
+    rows = tidy_rows(_results())
+    assert len(rows) == 3 * 2 * (2 * len(MEASURES) + 1)
+    text = tidy_csv(rows)
+    table = list(csv.DictReader(io.StringIO(text)))
+    assert text.splitlines()[0] == "subject,alpha2,variant,measure,value,unit"
+    assert {r["variant"] for r in table} == {"residual", "no_residual", "fanning"}
+    assert {r["measure"] for r in table} == set(MEASURES)
+    get = {(r["subject"], r["alpha2"], r["variant"], r["measure"]): r for r in table}
+    assert float(get[("s2", "1.0", "residual", "centrality")]["value"]) == 3.0
+    assert float(get[("s2", "10.0", "no_residual", "centrality")]["value"]) == 2.0
+    assert get[("s0", "1.0", "no_residual", "registration_norm")]["value"] == "5.0"
+    assert get[("s0", "1.0", "residual", "converged")]["value"] == "1.0"
+    assert get[("s0", "1.0", "fanning", "ase")]["unit"] == "1"
+    assert get[("s0", "1.0", "residual", "involutivity")]["unit"] == "mm"
+    assert ("s0", "1.0", "fanning", "centrality") not in get
+    rms = tidy_rows(_results(unit="mm RMS"))
+    assert {r["unit"] for r in rms if r["measure"] == "centrality"} == {"mm RMS"}
+    assert {r["unit"] for r in tidy_rows(_results(), unit="px")} >= {"px"}
+
+
+def test_paired_comparison_known_answer():
+    rng = np.random.default_rng(0)
+    res = paired_comparison([1, 2, 3, 4, 5], [2, 4, 6, 8, 10], rng)  # d = -1 ... -5
+    assert res["n"] == 5 and res["fraction_residual_lower"] == 1.0
+    assert res["median_difference"] == -3.0
+    assert res["wilcoxon_p"] == pytest.approx(2 / 2**5)  # exact two-sided, all one sign
+    assert -5 <= res["ci_low"] <= -3 <= res["ci_high"] <= -1
+    again = paired_comparison([1, 2, 3, 4, 5], [2, 4, 6, 8, 10], np.random.default_rng(0))
+    assert again == res  # seeded
+    mixed = paired_comparison([0, 5, 0, 5, 0, 5, 0], [1, 0, 1, 0, 1, 0, 1], rng)
+    assert mixed["fraction_residual_lower"] == pytest.approx(4 / 7)
+    assert mixed["median_difference"] == -1.0
+
+
+def test_paired_comparison_degenerate_cases():
+    rng = np.random.default_rng(1)
+    zero = paired_comparison([1.0, 2.0], [1.0, 2.0], rng)
+    assert zero["wilcoxon_p"] == 1.0 and zero["median_difference"] == 0.0
+    assert zero["fraction_residual_lower"] == 0.0 and "zero" in zero["note"]
+    empty = paired_comparison([], [], rng)
+    assert empty["n"] == 0 and empty["wilcoxon_p"] is None and empty["median_difference"] is None
+    one = paired_comparison([1.0], [3.0], rng)
+    assert one["wilcoxon_p"] == pytest.approx(1.0) and "n = 1" in one["note"]
+    with pytest.raises(ValueError, match="residual, no_residual: .*shapes"):
+        paired_comparison([1.0, 2.0], [1.0], rng)
+    with pytest.raises(ValueError, match="finite"):
+        paired_comparison([np.nan], [1.0], rng)
+
+
+def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
+    results = _results(4)
+    results[3]["alpha2"].pop("10.0")  # failed there
+    rows = paired_statistics(results, seed=0)
+    assert [(r["alpha2"], r["measure"]) for r in rows[:2]] == [
+        (1.0, "midpoint_distance"),
+        (1.0, "centrality"),
+    ]
+    assert len(rows) == 2 * 5
+    get = {(r["alpha2"], r["measure"]): r for r in rows}
+    assert get[(1.0, "centrality")]["n"] == 4 and get[(10.0, "centrality")]["n"] == 3
+    assert get[(1.0, "centrality")]["median_difference"] == -2.0
+    assert get[(1.0, "transvectivity")]["wilcoxon_p"] == 1.0
+    assert get[(1.0, "ase")]["fraction_residual_lower"] == 1.0
+    lines = paired_csv(rows).splitlines()
+    assert lines[0].startswith("alpha2,measure,n,fraction_residual_lower,median_difference")
+    assert len(lines) == 11
