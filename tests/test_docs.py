@@ -49,6 +49,7 @@ def test_readme_has_a_usage_example():
     assert python_blocks(ROOT / "README.md"), "README has no python example"
 
 
+@pytest.mark.filterwarnings("error::manifolds.errors.ConvergenceWarning")
 @pytest.mark.parametrize("page", DOC_PAGES)
 def test_python_snippets_run(page, tmp_path, monkeypatch):
     """Every ```python block of the page runs, in order, in one namespace (from a scratch folder)."""
