@@ -23,9 +23,10 @@ from .errors import (
 from .euclidean import Euclidean
 from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
-from .lddmm import GaussianKernel, LDDMMLandmarks, RegistrationResult, register
+from .lddmm import GaussianKernel, LandmarkTangent, LDDMMLandmarks, RegistrationResult, register
 from .metric_field import MetricField
 from .poincare_half_plane import PoincareHalfPlane
+from .point_distance import DISTANCES, point_distance
 from .residual import ResidualAugmented, ResidualTangent
 from .riemannian import RiemannianManifold
 from .spd import SPDMatrices
@@ -44,8 +45,11 @@ __all__ = [
     "WarpedSurface",
     "GaussianKernel",
     "LDDMMLandmarks",
+    "LandmarkTangent",
     "RegistrationResult",
     "register",
+    "point_distance",
+    "DISTANCES",
     "ResidualAugmented",
     "ResidualTangent",
     "ConvergenceError",

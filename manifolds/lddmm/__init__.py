@@ -8,6 +8,8 @@
 - :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
   (numpy reference or the compiled :mod:`.kernels_numba`);
 - :mod:`.control_points`: control-point policies (dense, grid, auto);
+- :mod:`.tangent`: :class:`LandmarkTangent`, momenta with their control points
+  (the tangents of a space that optimises its control points);
 - :mod:`.shapes`: smooth random shapes (the space's ``random_point``).
 """
 
@@ -16,9 +18,11 @@ from .kernels import GaussianKernel, numba_available
 from .registration import RegistrationResult, register, registration_objective
 from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
+from .tangent import LandmarkTangent
 
 __all__ = [
     "LDDMMLandmarks",
+    "LandmarkTangent",
     "GaussianKernel",
     "numba_available",
     "RegistrationResult",
