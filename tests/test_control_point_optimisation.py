@@ -164,3 +164,16 @@ def test_study_runs_with_optimised_control_points_and_reports_in_the_chosen_unit
     assert optimised["registration_error"] < out["rms"]["registration_error"]
     values = [optimised[v]["centrality"] for v in ("residual", "no_residual")]
     assert np.all(np.isfinite(values)) and np.isfinite(optimised["fanning"]["ase"])
+
+
+def test_warm_start_from_a_tangent_with_control_points():
+    t, s, _ = _shapes(seed=5)
+    fixed, space = _spaces()
+    first = space.register(t, s)
+    v = space.log(t, s)
+    assert space.is_tangent(t, v) and fixed.is_tangent(t, np.zeros_like(fixed.control_points(t)))
+    again = space.register(t, s, initial_momenta=v)
+    assert space.n_registrations == 2  # a different start is a different registration
+    assert again.objective <= first.objective * (1 + 1e-12)
+    with pytest.raises(ManifoldError, match="initial_momenta"):
+        fixed.register(t, s, initial_momenta=v)

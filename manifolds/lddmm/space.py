@@ -251,9 +251,9 @@ class LDDMMLandmarks(Connection):
         tangent = self._check_momenta(cp, tangent, "tangent")
         return self.shoot(point, tangent, control_points=None)
 
-    def _key(self, template, target, initial_momenta) -> bytes:
+    def _key(self, template, target, initial_momenta, start=None) -> bytes:
         h = hashlib.blake2b(digest_size=20)
-        for arr in (template, target, initial_momenta):
+        for arr in (template, target, initial_momenta, start):
             h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
         policy = self.control_points_policy
         params = (
@@ -272,13 +272,28 @@ class LDDMMLandmarks(Connection):
         return h.digest()
 
     def register(self, template, target, initial_momenta=None) -> RegistrationResult:
-        """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters."""
+        """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters.
+
+        ``initial_momenta`` (warm start) are momenta at the policy's control points,
+        or, with ``optimize_control_points``, a :class:`LandmarkTangent` whose
+        control points are the optimiser's start as well.
+        """
         template = self.check_point(template, "template")
         target = self.check_point(target, "target")
         cp = self.control_points(template)
-        if initial_momenta is not None:
+        start = None
+        if isinstance(initial_momenta, LandmarkTangent):
+            c0, initial_momenta = self._split_tangent(template, initial_momenta, "initial_momenta")
+            if self.optimize_control_points:
+                cp = start = c0
+            elif c0.shape != cp.shape or not np.array_equal(c0, cp):
+                raise ManifoldError(
+                    f"{self.name}: initial_momenta: control points differ from the policy's "
+                    "and the space does not optimise them"
+                )
+        elif initial_momenta is not None:
             initial_momenta = self._check_momenta(cp, initial_momenta, "initial_momenta")
-        key = self._key(template, target, initial_momenta)
+        key = self._key(template, target, initial_momenta, start)
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
@@ -356,6 +371,18 @@ class LDDMMLandmarks(Connection):
             shape, backward.momenta, forward.deformed, control_points=backward.control_points
         )
         return float(dist(back, template))
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``vector`` is finite momenta ``(n_cp, d)`` at the policy's control
+        points of ``point``, or a :class:`LandmarkTangent` with finite entries."""
+        if isinstance(vector, LandmarkTangent):
+            c, mu = vector.control_points, vector.momenta
+            return c.shape[1] == self.point_shape[1] and bool(
+                np.isfinite(c).all() and np.isfinite(mu).all()
+            )
+        mu = np.asarray(vector, dtype=float)
+        cp = self.control_points(point)
+        return mu.shape == cp.shape and bool(np.isfinite(mu).all())
 
     # ------------------------------------------------------------ metric
     def inner(self, point, u, v):
