@@ -209,55 +209,18 @@ def register(
     else:
         mu0 = pre.linearised_start(kernel, template, target, cp)
 
-    n_var = n_cp * dim
     c_scale = kernel.sigma if control_point_scale is None else float(control_point_scale)
     if not (np.isfinite(c_scale) and c_scale > 0):
         raise ValueError(f"control_point_scale: expected a positive number, got {c_scale!r}")
-    last: dict = {}
-
-    def unpack(x):
-        """Momenta and control points at the optimiser's variables ``x``."""
-        mu = pre.to_momenta(x[:n_var].reshape(n_cp, dim))
-        c = (x[n_var:].reshape(n_cp, dim) * c_scale) if optimize_control_points else cp
-        return mu, c
-
-    def evaluate(x):
-        """Objective, gradient, deformed template and RKHS norm at ``x``; the latest is kept,
-        so the start (which sets the scale) and the final iterate are not shot twice."""
-        key = x.tobytes()
-        if last.get("key") != key:
-            mu, c = unpack(x)
-            out = registration_objective(
-                kernel,
-                template,
-                target,
-                c,
-                mu,
-                alpha,
-                integrator,
-                n_steps,
-                control_points_gradient=optimize_control_points,
-            )
-            last.update(key=key, out=out)
-        return last["out"]
-
-    x0 = pre.to_variables(mu0).ravel()
-    if optimize_control_points:
-        x0 = np.concatenate([x0, (cp / c_scale).ravel()])
-    f_init = evaluate(x0)[0]
-    scale = f_init if f_init > 0 else 1.0
-
-    def fun_and_grad(x):
-        value, grad, _, _ = evaluate(x)
-        if not optimize_control_points:
-            return value / scale, pre.gradient_to_variables(grad).ravel() / scale
-        g_c, g_mu = grad
-        g = np.concatenate([pre.gradient_to_variables(g_mu).ravel(), (c_scale * g_c).ravel()])
-        return value / scale, g / scale
-
-    opt = minimize_lbfgsb(fun_and_grad, x0, options)
-    mu, c = unpack(opt.x)
-    result = _result(target, c, mu, evaluate(opt.x), opt, scale)
+    problem = _Problem(
+        kernel, template, target, alpha, integrator, n_steps, pre, optimize_control_points, c_scale
+    )
+    x0 = problem.variables(mu0, cp)
+    f_init = problem.evaluate(x0)[0]
+    problem.scale = f_init if f_init > 0 else 1.0
+    opt = minimize_lbfgsb(problem.fun_and_grad, x0, options)
+    mu, c = problem.unpack(opt.x)
+    result = _result(target, c, mu, problem.evaluate(opt.x), opt, problem.scale)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
@@ -268,6 +231,67 @@ def register(
             stacklevel=2,
         )
     return result
+
+
+class _Problem:
+    """The objective as L-BFGS-B sees it, on ``x = (z[, c / c_scale])``, normalised by ``scale``.
+
+    ``z = R^T mu`` are the preconditioned momenta; the control points are part of
+    ``x`` only when they are optimised. The latest evaluation is kept, so the start
+    (which sets ``scale``) and the final iterate are not shot twice.
+    """
+
+    def __init__(
+        self, kernel, template, target, alpha, integrator, n_steps, pre, optimise, c_scale
+    ):
+        self.kernel, self.template, self.target = kernel, template, target
+        self.alpha, self.integrator, self.n_steps = alpha, integrator, n_steps
+        self.pre, self.optimise, self.c_scale = pre, optimise, c_scale
+        self.scale = 1.0
+        self.control_points = None
+        self._last: dict = {}
+
+    def variables(self, mu, control_points) -> np.ndarray:
+        """``x`` of the momenta ``mu`` at ``control_points`` (fixed ones are kept aside)."""
+        self.control_points = control_points
+        z = self.pre.to_variables(mu).ravel()
+        return np.concatenate([z, (control_points / self.c_scale).ravel()]) if self.optimise else z
+
+    def unpack(self, x):
+        """Momenta and control points at ``x``."""
+        shape, n = self.control_points.shape, self.control_points.size
+        mu = self.pre.to_momenta(x[:n].reshape(shape))
+        if not self.optimise:
+            return mu, self.control_points
+        return mu, x[n:].reshape(shape) * self.c_scale
+
+    def evaluate(self, x):
+        """Objective, gradient, deformed template and squared RKHS norm at ``x``."""
+        key = x.tobytes()
+        if self._last.get("key") != key:
+            mu, c = self.unpack(x)
+            out = registration_objective(
+                self.kernel,
+                self.template,
+                self.target,
+                c,
+                mu,
+                self.alpha,
+                self.integrator,
+                self.n_steps,
+                control_points_gradient=self.optimise,
+            )
+            self._last.update(key=key, out=out)
+        return self._last["out"]
+
+    def fun_and_grad(self, x):
+        """Normalised objective and its gradient with respect to ``x``."""
+        value, grad, _, _ = self.evaluate(x)
+        if not self.optimise:
+            return value / self.scale, self.pre.gradient_to_variables(grad).ravel() / self.scale
+        g_c, g_mu = grad
+        g_z = self.pre.gradient_to_variables(g_mu).ravel()
+        return value / self.scale, np.concatenate([g_z, (self.c_scale * g_c).ravel()]) / self.scale
 
 
 def _result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:
