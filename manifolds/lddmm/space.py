@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import asdict
 
 import numpy as np
@@ -341,7 +342,7 @@ class LDDMMLandmarks(Connection):
         """Forget cached registrations."""
         self._cache.clear()
 
-    def inverse_consistency(self, template, shape, distance="rms") -> float:
+    def inverse_consistency(self, template, shape, distance: str | Callable = "rms") -> float:
         """Inverse consistency error of the registrations between ``template`` and ``shape``.
 
         With ``phi_TS`` the deformation registering ``T`` onto ``S`` and ``phi_ST``
