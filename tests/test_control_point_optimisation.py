@@ -9,7 +9,13 @@ optimising the control points lowers the registration objective.
 import numpy as np
 import pytest
 
-from ladders import fanning_scheme, fanning_transport, pole_ladder, symmetry_errors
+from ladders import (
+    fanning_scheme,
+    fanning_transport,
+    pole_ladder,
+    schild_ladder,
+    symmetry_errors,
+)
 from manifolds import LandmarkTangent, LDDMMLandmarks, ManifoldError, ResidualAugmented
 from manifolds.residual import ResidualTangent
 
@@ -105,6 +111,10 @@ def test_residual_space_and_pole_ladder_with_control_points():
     errs = symmetry_errors(aug, t, s, s2)
     np.testing.assert_allclose(traj.end_point, errs.points["pole_ladder"], atol=1e-9)
     assert isinstance(w.tangent, LandmarkTangent)
+    for ladder in (pole_ladder, schild_ladder):  # several rungs: sums and scalings of tangents
+        w2, traj2 = ladder(aug, s, t, u, n_rungs=2, return_trajectory=True)
+        assert isinstance(w2.tangent, LandmarkTangent) and np.isfinite(traj2.end_point).all()
+        np.testing.assert_allclose(aug.exp(t, w2), traj2.end_point, atol=1e-12)
     for variant in (True, False):
         values = symmetry_errors(ResidualAugmented(space, variant), t, s, s2).as_dict()
         assert all(np.isfinite(x) and x >= 0 for x in values.values())
