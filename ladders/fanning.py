@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from manifolds.errors import ConvergenceError
+from manifolds.lddmm.tangent import LandmarkTangent
 
 __all__ = ["FanningResult", "fanning_scheme", "fanning_transport"]
 
@@ -140,13 +141,20 @@ def fanning_transport(
 
     The same call pattern as the ladders: the geodesic is the one shot from
     ``base`` with ``Log_base(end)`` (a registration, cached by the space), and
-    ``tangent`` is a set of momenta at the control points of ``base``.
+    ``tangent`` is a set of momenta at the control points of ``base``, or a
+    :class:`~manifolds.lddmm.LandmarkTangent` carrying its own control points.
+
+    When the tangent's control points differ from the geodesic's (e.g. both
+    optimised by their registrations), the tangent is first expressed at the
+    geodesic's control points ``c`` by matching its velocity there:
+    ``w = K(c, c)^{-1} K(c, c_w) w_0``, the RKHS-orthogonal projection of its
+    velocity field onto the fields carried by ``c``.
 
     Parameters
     ----------
     space : manifolds.LDDMMLandmarks
     base, end : arrays, shape ``space.point_shape``
-    tangent : array, shape ``(n_cp, d)``
+    tangent : array, shape ``(n_cp, d)``, or LandmarkTangent
         Momenta at ``space.control_points(base)``, e.g. ``space.log(base, other)``.
     n_steps : int, default 10
     max_norm_drift : float, default 0.5
@@ -159,8 +167,15 @@ def fanning_transport(
         flowed to the end of the geodesic); deform a shape with them through
         ``space.shoot(shape, result.momenta, control_points=result.control_points)``.
     """
-    geodesic = space.log(base, end)
-    c0 = space.control_points(base)
-    return fanning_scheme(
-        space.kernel, c0, geodesic, tangent, n_steps=n_steps, max_norm_drift=max_norm_drift
-    )
+    c0, mu0 = _momenta_at(space, base, space.log(base, end))
+    c_w, w0 = _momenta_at(space, base, tangent)
+    if c_w.shape != c0.shape or not np.array_equal(c_w, c0):
+        w0 = space.kernel.solve(c0, space.kernel.convolve(c0, c_w, w0))
+    return fanning_scheme(space.kernel, c0, mu0, w0, n_steps=n_steps, max_norm_drift=max_norm_drift)
+
+
+def _momenta_at(space, base, tangent):
+    """Control points and momenta of a tangent of ``space`` at ``base``."""
+    if isinstance(tangent, LandmarkTangent):
+        return tangent.control_points, tangent.momenta
+    return space.control_points(base), np.asarray(tangent, dtype=float)

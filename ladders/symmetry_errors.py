@@ -9,9 +9,14 @@ that hold exactly in an affine symmetric space:
 * involutivity: ``d(s_M(s_M(S')), S')``;
 * transvectivity: ``d(s_T o s_M(S'), s_M o s_S(S'))`` (eq. 8 of the paper).
 
-The distance is a parameter; the default is the paper's: the L2 (Frobenius)
-norm of the difference of the point arrays, ``|| S_1 - S_2 ||_2``, which for
-landmark shapes is the L2 distance between corresponding nodes.
+The distance is a parameter (:func:`manifolds.point_distance.point_distance`):
+``"rms"`` (default), the paper's unit, is the root mean square distance between
+corresponding vertices, ``||S_1 - S_2||_F / sqrt(k)`` for shapes of ``k``
+vertices (the rows of a ``(k, d)`` point); ``"frobenius"`` is ``||S_1 - S_2||_F``;
+``"mean"`` the mean per-vertex Euclidean distance; a callable ``(a, b) -> float``
+is used as given. For 1-D points (one vertex) the three coincide; for other
+shapes the last axis holds a vertex's coordinates and the leading axes index
+the vertices.
 """
 
 from __future__ import annotations
@@ -20,6 +25,8 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+
+from manifolds.point_distance import point_distance
 
 __all__ = [
     "l2_distance",
@@ -31,47 +38,41 @@ __all__ = [
     "symmetry_errors",
 ]
 
-Distance = Callable[[np.ndarray, np.ndarray], np.ndarray]
+Distance = Callable[[np.ndarray, np.ndarray], np.ndarray] | str
 
 
-def l2_distance(space) -> Distance:
-    """The paper's distance: Frobenius norm over the point axes of ``space``.
+def l2_distance(space) -> Callable:
+    """Frobenius norm over the point axes of ``space``: ``(a, b) -> ||a - b||_F``.
 
-    Returns a function ``(a, b) -> ||a - b||_2`` that broadcasts over batch axes.
+    Broadcasts over batch axes; ``point_distance("frobenius", space.point_shape)``.
     """
-    nd = len(space.point_shape)
-
-    def distance(a, b):
-        diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
-        return np.sqrt((diff**2).sum(axis=tuple(range(diff.ndim - nd, diff.ndim))))
-
-    return distance
+    return point_distance("frobenius", space.point_shape)
 
 
 def _distance(space, distance):
-    return l2_distance(space) if distance is None else distance
+    return point_distance("rms" if distance is None else distance, space.point_shape)
 
 
-def midpoint_distance(space, template, shape, distance: Distance | None = None):
+def midpoint_distance(space, template, shape, distance: Distance = "rms"):
     """Distance between the midpoints shot from ``template`` and from ``shape``."""
     d = _distance(space, distance)
     return d(space.midpoint(template, shape), space.midpoint(shape, template))
 
 
-def centrality_error(space, template, shape, distance: Distance | None = None):
+def centrality_error(space, template, shape, distance: Distance = "rms"):
     """Centrality ``d(s_M(T), S)`` with ``M = Exp_T(1/2 Log_T S)`` (paper, Section 2.3)."""
     d = _distance(space, distance)
     m = space.midpoint(template, shape)
     return d(space.symmetry(m, template), shape)
 
 
-def involutivity_error(space, center, point, distance: Distance | None = None):
+def involutivity_error(space, center, point, distance: Distance = "rms"):
     """Involutivity ``d(s_M(s_M(P)), P)`` (paper, Section 2.4)."""
     d = _distance(space, distance)
     return d(space.symmetry(center, space.symmetry(center, point)), point)
 
 
-def transvectivity_error(space, template, shape, other, distance: Distance | None = None):
+def transvectivity_error(space, template, shape, other, distance: Distance = "rms"):
     """Transvectivity ``d(s_T o s_M(S'), s_M o s_S(S'))`` with ``M`` the midpoint from ``T``.
 
     Zero in an affine symmetric space (eq. 8); otherwise its leading term is a
@@ -104,9 +105,7 @@ class SymmetryErrors:
         return {k: np.asarray(v).tolist() for k, v in asdict(self).items() if k != "points"}
 
 
-def symmetry_errors(
-    space, template, shape, other, distance: Distance | None = None
-) -> SymmetryErrors:
+def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -> SymmetryErrors:
     """All four errors of Section 3, sharing intermediate results.
 
     Parameters
@@ -115,8 +114,9 @@ def symmetry_errors(
     template : point ``T`` (the atlas)
     shape : point ``S`` (e.g. end-diastole)
     other : point ``S'`` (e.g. end-systole)
-    distance : callable, optional
-        Defaults to :func:`l2_distance` of ``space``.
+    distance : {"rms", "frobenius", "mean"} or callable, default "rms"
+        Per-vertex RMS distance (the paper's unit), Frobenius norm, mean
+        per-vertex distance, or a function ``(a, b) -> float``.
 
     Returns
     -------

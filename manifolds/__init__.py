@@ -25,6 +25,7 @@ from .hyperbolic import Hyperbolic, minkowski_inner
 from .hypersphere import Hypersphere
 from .lddmm import (
     GaussianKernel,
+    LandmarkTangent,
     LDDMMLandmarks,
     RegistrationResult,
     StationaryFlow,
@@ -34,6 +35,7 @@ from .lddmm import (
 )
 from .metric_field import MetricField
 from .poincare_half_plane import PoincareHalfPlane
+from .point_distance import DISTANCES, point_distance
 from .residual import ResidualAugmented, ResidualTangent
 from .riemannian import RiemannianManifold
 from .spd import SPDMatrices
@@ -52,11 +54,14 @@ __all__ = [
     "WarpedSurface",
     "GaussianKernel",
     "LDDMMLandmarks",
+    "LandmarkTangent",
     "RegistrationResult",
     "register",
     "SVFLandmarks",
     "StationaryFlow",
     "register_svf",
+    "point_distance",
+    "DISTANCES",
     "ResidualAugmented",
     "ResidualTangent",
     "ConvergenceError",

@@ -82,10 +82,11 @@ def test_without_residuals_errors_grow_with_alpha():
         without = symmetry_errors(ResidualAugmented(base, False), t, s, s2)
         for name in ("midpoint_distance", "centrality", "involutivity", "transvectivity"):
             assert getattr(with_res, name) < 1e-12
-        # Centrality of the shrunk symmetry: |s_M(T) - S| with M = T + (S-T)/(2(1+a^2)).
+        # Centrality of the shrunk symmetry: |s_M(T) - S| with M = T + (S-T)/(2(1+a^2)),
+        # per-vertex RMS over the 6 vertices (the default distance).
         lam = 1.0 / (1.0 + alpha**2)
         m = t + 0.5 * lam * (s - t)
-        expected = np.linalg.norm(m - lam * (t - m) - s)
+        expected = np.linalg.norm(m - lam * (t - m) - s) / np.sqrt(6)
         np.testing.assert_allclose(without.centrality, expected, rtol=1e-12)
         assert without.centrality > previous
         previous = without.centrality

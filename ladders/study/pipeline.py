@@ -25,10 +25,11 @@ import numpy as np
 
 from manifolds.errors import ConvergenceWarning
 from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks, group_pole_ladder
+from manifolds.point_distance import point_distance
 from manifolds.residual import ResidualAugmented
 
 from ..fanning import fanning_transport
-from ..symmetry_errors import l2_distance, symmetry_errors
+from ..symmetry_errors import symmetry_errors
 from .area_strain import area_strain, area_strain_error
 from .cohort import Subject
 
@@ -36,6 +37,12 @@ __all__ = ["StudyConfig", "run_subject", "VARIANTS", "ERROR_NAMES"]
 
 VARIANTS = ("residual", "no_residual")
 ERROR_NAMES = ("midpoint_distance", "centrality", "involutivity", "transvectivity")
+#: Unit of the distances of the results, per ``StudyConfig.distance`` (meshes in mm).
+UNITS = {
+    "rms": "mm (per-vertex RMS)",
+    "frobenius": "mm (Frobenius norm over vertices)",
+    "mean": "mm (mean per-vertex distance)",
+}
 
 
 @dataclass
@@ -65,6 +72,11 @@ class StudyConfig:
         (:class:`~manifolds.lddmm.SVFLandmarks`). The fanning scheme integrates
         LDDMM geodesics; with ``"svf"`` its slot of the results holds the SVF
         pole ladder by conjugation, ``exp(-v/2) o exp(u) o exp(v/2)`` (``docs/svf.md``).
+    distance : str
+        Unit of the errors, the registration error and the inverse consistency:
+        ``"rms"`` (per-vertex RMS distance, the paper's mm), ``"frobenius"`` or ``"mean"``.
+    optimize_control_points : bool
+        Optimise the control points with the momenta (eq. 3), starting from the policy's.
     """
 
     alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
@@ -76,6 +88,8 @@ class StudyConfig:
     fanning_steps: int = 10
     kernel_backend: str = "auto"
     deformation: str = "lddmm"
+    distance: str = "rms"
+    optimize_control_points: bool = False
 
     def as_dict(self) -> dict:
         d = asdict(self)
@@ -92,7 +106,13 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         raise ValueError(
             f"StudyConfig.deformation: expected 'lddmm' or 'svf', got {config.deformation!r}"
         )
+    if config.optimize_control_points and config.deformation != "lddmm":
+        raise ValueError(
+            "StudyConfig.optimize_control_points: only the 'lddmm' deformation optimises "
+            f"its control points, got deformation={config.deformation!r}"
+        )
     k, d = template.shape
+    extra = {"optimize_control_points": True} if config.optimize_control_points else {}
     return spaces[config.deformation](
         n_landmarks=k,
         dim=d,
@@ -103,20 +123,21 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         n_steps=config.n_steps,
         optimizer={"max_iter": config.max_iter},
         backend=config.kernel_backend,
+        **extra,
     )
 
 
 def _one_alpha(config, atlas, faces, subject, alpha2, las_subject, shapes=None) -> dict:
     space = make_space(config, atlas, alpha2)
     t, s, s2 = atlas, subject.ed, subject.es
-    dist = l2_distance(space)
+    dist = point_distance(config.distance, space.point_shape)
     reg = space.register(t, s)
     out = {
-        "registration_error": float(reg.registration_error),
+        "registration_error": float(dist(reg.deformed, s)),
         "registration_rms": float(reg.rms_error),
         "rkhs_norm": float(reg.rkhs_norm),
         "converged": bool(reg.converged),
-        "inverse_consistency": float(space.inverse_consistency(t, s)),
+        "inverse_consistency": float(space.inverse_consistency(t, s, distance=dist)),
     }
     las = {"subject": las_subject}
     for variant in VARIANTS:
@@ -139,6 +160,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject, shapes=None) 
     out["fanning"] = {"ase": area_strain_error(las_subject, las["fanning"])}
     out["las"] = {key: np.asarray(v).tolist() for key, v in las.items()}
     out["n_registrations"] = int(space.n_registrations)
+    out["unit"] = UNITS[config.distance]
     return out
 
 

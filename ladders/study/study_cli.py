@@ -89,6 +89,17 @@ def add_study_parser(sub) -> None:
     p.add_argument(
         "--control-points", choices=("grid", "dense"), default="grid", help="control points"
     )
+    p.add_argument(
+        "--optimize-control-points",
+        action="store_true",
+        help="optimise the control points with the momenta (eq. 3), starting from the grid",
+    )
+    p.add_argument(
+        "--distance",
+        choices=("rms", "frobenius", "mean"),
+        default="rms",
+        help="unit of the errors: per-vertex RMS (the paper's mm), Frobenius or mean distance",
+    )
     p.add_argument("--integrator", choices=("euler", "rk2", "rk4"), default="euler")
     p.add_argument("--n-steps", type=int, default=10, help="time steps of the shooting")
     p.add_argument("--max-iter", type=int, default=100, help="L-BFGS-B iterations per registration")
@@ -235,6 +246,8 @@ def run_study_command(args) -> int:
         fanning_steps=args.fanning_steps,
         kernel_backend=args.kernel_backend,
         deformation=args.deformation,
+        distance=args.distance,
+        optimize_control_points=args.optimize_control_points,
     )
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "

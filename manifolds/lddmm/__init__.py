@@ -8,6 +8,8 @@
 - :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
   (numpy reference or the compiled :mod:`.kernels_numba`);
 - :mod:`.control_points`: control-point policies (dense, grid, auto);
+- :mod:`.tangent`: :class:`LandmarkTangent`, momenta with their control points
+  (the tangents of a space that optimises its control points);
 - :mod:`.shapes`: smooth random shapes (the space's ``random_point``);
 - :mod:`.svf_space`: :class:`SVFLandmarks`, the stationary-velocity-field landmark
   space (``exp`` = flow of a stationary kernel field, ``log`` = SVF registration),
@@ -39,9 +41,11 @@ from .svf_group import (
 )
 from .svf_registration import register_svf, svf_objective
 from .svf_space import SVFLandmarks
+from .tangent import LandmarkTangent
 
 __all__ = [
     "LDDMMLandmarks",
+    "LandmarkTangent",
     "GaussianKernel",
     "numba_available",
     "RegistrationResult",

@@ -97,20 +97,28 @@ def registration_objective(
     integrator: str | Integrator = "euler",
     n_steps: int = 10,
     with_gradient: bool = True,
+    control_points_gradient: bool = False,
 ):
-    """Objective ``C(mu)`` of eq. (3) and its exact gradient.
+    """Objective ``C(c, mu)`` of eq. (3) and its exact gradient.
 
-    When the control points are the template's vertices the template is
-    carried as the control points themselves (no separate point flow).
+    When the control points are the template's vertices (and
+    ``control_points_gradient`` is False) the template is carried as the
+    control points themselves (no separate point flow).
+
+    With ``control_points_gradient`` the gradient with respect to the initial
+    control points is returned as well: the adjoint state of ``c`` at ``t = 0``
+    (back-propagated data term) plus the regulariser's
+    ``d(alpha^2 <mu, K(c, c) mu>)/dc_i = -2 alpha^2 dmu_i/dt(0)``.
 
     Returns
     -------
     value : float
-    gradient : array, shape ``(n_cp, d)`` (only if ``with_gradient``)
+    gradient : array, shape ``(n_cp, d)``, or the pair ``(g_c, g_mu)`` with
+        ``control_points_gradient`` (None unless ``with_gradient``)
     deformed : array, shape ``(k, d)``, ``phi_1(T)``
     rkhs_sq : float, ``||v_0||_H^2``
     """
-    dense = _is_dense(template, control_points)
+    dense = not control_points_gradient and _is_dense(template, control_points)
     res = shoot(
         kernel,
         control_points,
@@ -128,11 +136,16 @@ def registration_objective(
         return value, None, deformed, rkhs_sq
     cot = -2.0 * resid
     if dense:
-        _, g_mu, _ = shooting_vjp(kernel, res, cot_control_points=cot)
+        g_c, g_mu, _ = shooting_vjp(kernel, res, cot_control_points=cot)
     else:
-        _, g_mu, _ = shooting_vjp(kernel, res, cot_points=cot)
+        g_c, g_mu, _ = shooting_vjp(kernel, res, cot_points=cot)
     g_mu += 2.0 * alpha**2 * res.initial_velocity
-    return value, g_mu, deformed, rkhs_sq
+    if not control_points_gradient:
+        return value, g_mu, deformed, rkhs_sq
+    # <mu, K mu> = 2 H(c, mu) and dmu/dt = -dH/dc: its gradient is -2 dmu/dt(0).
+    _, dmu0 = kernel.hamiltonian_rhs(np.asarray(control_points, dtype=float), momenta)
+    g_c -= 2.0 * alpha**2 * dmu0
+    return value, (g_c, g_mu), deformed, rkhs_sq
 
 
 def register(
@@ -148,8 +161,13 @@ def register(
     precondition: bool = True,
     rel_ridge: float = 1e-2,
     warn: bool = True,
+    optimize_control_points: bool = False,
+    control_point_scale: float | None = None,
 ) -> RegistrationResult:
     """Register ``template`` onto ``target`` by minimising eq. (3) with L-BFGS-B.
+
+    The momenta (and, with ``optimize_control_points``, the control points) minimise
+    ``C(c, mu)``; the gradient is exact (:func:`registration_objective`).
 
     Parameters
     ----------
@@ -172,6 +190,12 @@ def register(
         Ridge of the preconditioner relative to the mean of its diagonal.
     warn : bool
         Emit a :class:`ConvergenceWarning` when the optimiser did not converge.
+    optimize_control_points : bool, default False
+        Minimise eq. (3) over the control points and the momenta jointly,
+        starting from ``control_points``; the result holds the optimised ones.
+    control_point_scale : float, optional
+        The optimiser's variable for the control points is ``c / scale``
+        (default ``kernel.sigma``), next to the preconditioned ``z`` of the momenta.
     """
     template = np.asarray(template, dtype=float)
     target = np.asarray(target, dtype=float)
@@ -185,31 +209,18 @@ def register(
     else:
         mu0 = pre.linearised_start(kernel, template, target, cp)
 
-    last: dict = {}
-
-    def evaluate(z):
-        """Objective, gradient, deformed template and RKHS norm at ``z``; the latest is kept,
-        so the start (which sets the scale) and the final iterate are not shot twice."""
-        key = z.tobytes()
-        if last.get("key") != key:
-            mu = pre.to_momenta(z.reshape(n_cp, dim))
-            out = registration_objective(
-                kernel, template, target, cp, mu, alpha, integrator, n_steps
-            )
-            last.update(key=key, out=out)
-        return last["out"]
-
-    z0 = pre.to_variables(mu0).ravel()
-    f_init = evaluate(z0)[0]
-    scale = f_init if f_init > 0 else 1.0
-
-    def fun_and_grad(z):
-        value, g_mu, _, _ = evaluate(z)
-        return value / scale, pre.gradient_to_variables(g_mu).ravel() / scale
-
-    opt = minimize_lbfgsb(fun_and_grad, z0, options)
-    mu = pre.to_momenta(opt.x.reshape(n_cp, dim))
-    result = _result(target, cp, mu, evaluate(opt.x), opt, scale)
+    c_scale = kernel.sigma if control_point_scale is None else float(control_point_scale)
+    if not (np.isfinite(c_scale) and c_scale > 0):
+        raise ValueError(f"control_point_scale: expected a positive number, got {c_scale!r}")
+    problem = _Problem(
+        kernel, template, target, alpha, integrator, n_steps, pre, optimize_control_points, c_scale
+    )
+    x0 = problem.variables(mu0, cp)
+    f_init = problem.evaluate(x0)[0]
+    problem.scale = f_init if f_init > 0 else 1.0
+    opt = minimize_lbfgsb(problem.fun_and_grad, x0, options)
+    mu, c = problem.unpack(opt.x)
+    result = _result(target, c, mu, problem.evaluate(opt.x), opt, problem.scale)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
@@ -220,6 +231,67 @@ def register(
             stacklevel=2,
         )
     return result
+
+
+class _Problem:
+    """The objective as L-BFGS-B sees it, on ``x = (z[, c / c_scale])``, normalised by ``scale``.
+
+    ``z = R^T mu`` are the preconditioned momenta; the control points are part of
+    ``x`` only when they are optimised. The latest evaluation is kept, so the start
+    (which sets ``scale``) and the final iterate are not shot twice.
+    """
+
+    def __init__(
+        self, kernel, template, target, alpha, integrator, n_steps, pre, optimise, c_scale
+    ):
+        self.kernel, self.template, self.target = kernel, template, target
+        self.alpha, self.integrator, self.n_steps = alpha, integrator, n_steps
+        self.pre, self.optimise, self.c_scale = pre, optimise, c_scale
+        self.scale = 1.0
+        self.control_points = None
+        self._last: dict = {}
+
+    def variables(self, mu, control_points) -> np.ndarray:
+        """``x`` of the momenta ``mu`` at ``control_points`` (fixed ones are kept aside)."""
+        self.control_points = control_points
+        z = self.pre.to_variables(mu).ravel()
+        return np.concatenate([z, (control_points / self.c_scale).ravel()]) if self.optimise else z
+
+    def unpack(self, x):
+        """Momenta and control points at ``x``."""
+        shape, n = self.control_points.shape, self.control_points.size
+        mu = self.pre.to_momenta(x[:n].reshape(shape))
+        if not self.optimise:
+            return mu, self.control_points
+        return mu, x[n:].reshape(shape) * self.c_scale
+
+    def evaluate(self, x):
+        """Objective, gradient, deformed template and squared RKHS norm at ``x``."""
+        key = x.tobytes()
+        if self._last.get("key") != key:
+            mu, c = self.unpack(x)
+            out = registration_objective(
+                self.kernel,
+                self.template,
+                self.target,
+                c,
+                mu,
+                self.alpha,
+                self.integrator,
+                self.n_steps,
+                control_points_gradient=self.optimise,
+            )
+            self._last.update(key=key, out=out)
+        return self._last["out"]
+
+    def fun_and_grad(self, x):
+        """Normalised objective and its gradient with respect to ``x``."""
+        value, grad, _, _ = self.evaluate(x)
+        if not self.optimise:
+            return value / self.scale, self.pre.gradient_to_variables(grad).ravel() / self.scale
+        g_c, g_mu = grad
+        g_z = self.pre.gradient_to_variables(g_mu).ravel()
+        return value / self.scale, np.concatenate([g_z, (self.c_scale * g_c).ravel()]) / self.scale
 
 
 def _result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:

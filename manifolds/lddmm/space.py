@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import asdict
 
 import numpy as np
@@ -21,12 +22,14 @@ from ..connection import Connection
 from ..errors import ManifoldError
 from ..numerics.integrators import Integrator, get_integrator
 from ..numerics.optimizers import LBFGSOptions
+from ..point_distance import point_distance
 from ..validation import check_array
 from .control_points import AUTO_THRESHOLD, resolve_control_points
 from .kernels import GaussianKernel
 from .registration import RegistrationResult, register
 from .shapes import random_shape
 from .shooting import shoot
+from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]
 
@@ -60,6 +63,11 @@ class LDDMMLandmarks(Connection):
         Vertex count above which ``"auto"`` switches from dense to grid control points.
     precondition : bool, default True
         Preconditioned L-BFGS variables (see ``docs/lddmm.md``).
+    optimize_control_points : bool, default False
+        Register over the control points and the momenta (eq. 3), starting from
+        the policy's control points. ``log`` then returns a
+        :class:`~manifolds.lddmm.LandmarkTangent` carrying its control points;
+        ``exp`` accepts those and plain momenta at the policy's control points.
     """
 
     is_symmetric = False
@@ -80,6 +88,7 @@ class LDDMMLandmarks(Connection):
         block_size: int | None = None,
         auto_threshold: int = AUTO_THRESHOLD,
         precondition: bool = True,
+        optimize_control_points: bool = False,
     ):
         if int(n_landmarks) != n_landmarks or n_landmarks < 1:
             raise ManifoldError(f"LDDMMLandmarks: n_landmarks must be >= 1, got {n_landmarks}")
@@ -112,6 +121,7 @@ class LDDMMLandmarks(Connection):
         self.cache_size = int(cache_size)
         self.auto_threshold = int(auto_threshold)
         self.precondition = bool(precondition)
+        self.optimize_control_points = bool(optimize_control_points)
         self._cache: OrderedDict = OrderedDict()
         self.n_registrations = 0
 
@@ -122,7 +132,8 @@ class LDDMMLandmarks(Connection):
         return (
             f"LDDMMLandmarks(k={k}, d={d}, sigma={self.sigma:g}, alpha={self.alpha:g}, "
             f"control_points={policy!r}, integrator={self.integrator.name!r}, "
-            f"n_steps={self.n_steps})"
+            f"n_steps={self.n_steps}"
+            + (", optimize_control_points=True)" if self.optimize_control_points else ")")
         )
 
     # ------------------------------------------------------------ building blocks
@@ -149,6 +160,26 @@ class LDDMMLandmarks(Connection):
                 f"(n_cp, d) at the control points, got {arr.shape}"
             )
         return arr
+
+    def _split_tangent(self, point, tangent, name: str):
+        """Control points and momenta of ``tangent`` at ``point`` (a :class:`LandmarkTangent`
+        or plain momenta at the policy's control points)."""
+        if isinstance(tangent, LandmarkTangent):
+            cp = check_array(
+                tangent.control_points,
+                (self.point_shape[1],),
+                f"{self.name}: {name}.control_points",
+            )
+            return cp, self._check_momenta(cp, tangent.momenta, f"{name}.momenta")
+        cp = self.control_points(point)
+        return cp, self._check_momenta(cp, tangent, name)
+
+    def _tangent(self, control_points, momenta):
+        """``momenta`` as returned by ``log``: plain, or with their control points."""
+        momenta = np.array(momenta, dtype=float)
+        if self.optimize_control_points:
+            return LandmarkTangent(control_points, momenta)
+        return momenta
 
     def shoot(
         self,
@@ -209,15 +240,21 @@ class LDDMMLandmarks(Connection):
 
     # ------------------------------------------------------------ connection
     def exp(self, point, tangent):
-        """``Exp_T(mu) = phi_1(T)``; ``tangent`` is the momenta at ``c(T)``, ``(n_cp, d)``."""
+        """``Exp_T(mu) = phi_1(T)``, shot from the tangent's control points.
+
+        ``tangent`` is a :class:`LandmarkTangent` or momenta ``(n_cp, d)`` at ``c(T)``.
+        """
         point = self.check_point(point, "point")
+        if isinstance(tangent, LandmarkTangent):
+            cp, momenta = self._split_tangent(point, tangent, "tangent")
+            return self.shoot(point, momenta, control_points=cp)
         cp = self.control_points(point)
         tangent = self._check_momenta(cp, tangent, "tangent")
         return self.shoot(point, tangent, control_points=None)
 
-    def _key(self, template, target, initial_momenta) -> bytes:
+    def _key(self, template, target, initial_momenta, start=None) -> bytes:
         h = hashlib.blake2b(digest_size=20)
-        for arr in (template, target, initial_momenta):
+        for arr in (template, target, initial_momenta, start):
             h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
         policy = self.control_points_policy
         params = (
@@ -230,18 +267,34 @@ class LDDMMLandmarks(Connection):
             tuple(sorted(asdict(self.optimizer).items())),
             self.precondition,
             self.auto_threshold,
+            self.optimize_control_points,
         )
         h.update(repr(params).encode())
         return h.digest()
 
     def register(self, template, target, initial_momenta=None) -> RegistrationResult:
-        """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters."""
+        """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters.
+
+        ``initial_momenta`` (warm start) are momenta at the policy's control points,
+        or, with ``optimize_control_points``, a :class:`LandmarkTangent` whose
+        control points are the optimiser's start as well.
+        """
         template = self.check_point(template, "template")
         target = self.check_point(target, "target")
         cp = self.control_points(template)
-        if initial_momenta is not None:
+        start = None
+        if isinstance(initial_momenta, LandmarkTangent):
+            c0, initial_momenta = self._split_tangent(template, initial_momenta, "initial_momenta")
+            if self.optimize_control_points:
+                cp = start = c0
+            elif c0.shape != cp.shape or not np.array_equal(c0, cp):
+                raise ManifoldError(
+                    f"{self.name}: initial_momenta: control points differ from the policy's "
+                    "and the space does not optimise them"
+                )
+        elif initial_momenta is not None:
             initial_momenta = self._check_momenta(cp, initial_momenta, "initial_momenta")
-        key = self._key(template, target, initial_momenta)
+        key = self._key(template, target, initial_momenta, start)
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
@@ -256,6 +309,7 @@ class LDDMMLandmarks(Connection):
             initial_momenta=initial_momenta,
             options=self.optimizer,
             precondition=self.precondition,
+            optimize_control_points=self.optimize_control_points,
         )
         self.n_registrations += 1
         for arr in (result.momenta, result.residual, result.deformed, result.control_points):
@@ -267,34 +321,43 @@ class LDDMMLandmarks(Connection):
         return result
 
     def log(self, point, other):
-        """``Log_T(S)``: the registration momenta at ``c(T)``, shape ``(n_cp, d)``."""
+        """``Log_T(S)``: the registration momenta at ``c(T)``, shape ``(n_cp, d)``.
+
+        With ``optimize_control_points`` a :class:`LandmarkTangent` holding the
+        optimised control points and the momenta.
+        """
         point = self.check_point(point, "point")
         other = self.check_point(other, "other")
-        return self.register(point, other).momenta.copy()
+        res = self.register(point, other)
+        return self._tangent(res.control_points, res.momenta)
 
     def log_with_residual(self, point, other):
         """``(Log_T(S), delta)`` with ``delta = S - Exp_T(Log_T S)`` (eq. 4), one registration."""
         point = self.check_point(point, "point")
         other = self.check_point(other, "other")
         res = self.register(point, other)
-        return res.momenta.copy(), res.residual.copy()
+        return self._tangent(res.control_points, res.momenta), res.residual.copy()
 
     def clear_cache(self) -> None:
         """Forget cached registrations."""
         self._cache.clear()
 
-    def inverse_consistency(self, template, shape) -> float:
+    def inverse_consistency(self, template, shape, distance: str | Callable = "rms") -> float:
         """Inverse consistency error of the registrations between ``template`` and ``shape``.
 
         With ``phi_TS`` the deformation registering ``T`` onto ``S`` and ``phi_ST``
         the one registering ``S`` onto ``T`` (each shot from its own template's
-        control points), returns ``|| phi_ST(phi_TS(T)) - T ||_2``, the L2 norm
-        over the vertices of how far the composition is from the identity on ``T``
-        (paper, Table 1). It is zero when ``phi_ST = phi_TS^{-1}`` on ``T``.
+        control points), returns ``d(phi_ST(phi_TS(T)), T)``, how far the
+        composition is from the identity on ``T`` (paper, Table 1). It is zero
+        when ``phi_ST = phi_TS^{-1}`` on ``T``.
 
         Parameters
         ----------
         template, shape : arrays, shape ``(k, d)``
+        distance : {"rms", "frobenius", "mean"} or callable, default "rms"
+            Per-vertex RMS distance ``||A - B||_F / sqrt(k)`` (the paper's unit),
+            Frobenius norm, mean per-vertex distance, or ``(a, b) -> float``
+            (:func:`manifolds.point_distance.point_distance`).
 
         Returns
         -------
@@ -304,16 +367,32 @@ class LDDMMLandmarks(Connection):
         shape = self.check_point(shape, "shape")
         forward = self.register(template, shape)
         backward = self.register(shape, template)
-        back = self.flow(shape, backward.momenta, forward.deformed)
-        return float(np.sqrt(((back - template) ** 2).sum()))
+        dist = point_distance(distance, self.point_shape)
+        back = self.flow(
+            shape, backward.momenta, forward.deformed, control_points=backward.control_points
+        )
+        return float(dist(back, template))
+
+    def is_tangent(self, point, vector, atol: float | None = None):
+        """Whether ``vector`` is finite momenta ``(n_cp, d)`` at the policy's control
+        points of ``point``, or a :class:`LandmarkTangent` with finite entries."""
+        if isinstance(vector, LandmarkTangent):
+            c, mu = vector.control_points, vector.momenta
+            return c.shape[1] == self.point_shape[1] and bool(
+                np.isfinite(c).all() and np.isfinite(mu).all()
+            )
+        mu = np.asarray(vector, dtype=float)
+        cp = self.control_points(point)
+        return mu.shape == cp.shape and bool(np.isfinite(mu).all())
 
     # ------------------------------------------------------------ metric
     def inner(self, point, u, v):
         """RKHS product ``sum_ij K(c_i, c_j) u_i . v_j`` at the control points of ``point``."""
-        cp = self.control_points(point)
-        u = self._check_momenta(cp, u, "u")
-        v = self._check_momenta(cp, v, "v")
-        return self.kernel.rkhs_inner(cp, u, v)
+        cp, u_mu = self._split_tangent(point, u, "u")
+        cp_v, v_mu = self._split_tangent(point, v, "v")
+        if cp_v.shape != cp.shape or not np.array_equal(cp_v, cp):
+            raise ManifoldError(f"{self.name}: inner: u and v are at different control points")
+        return self.kernel.rkhs_inner(cp, u_mu, v_mu)
 
     def norm(self, point, v):
         """RKHS norm ``||v||_H`` of momenta ``v`` at ``point``."""
@@ -333,4 +412,4 @@ class LDDMMLandmarks(Connection):
         z = rng.standard_normal(cp.shape)
         vel = self.kernel.convolve(cp, cp, z)
         rms = np.sqrt((vel * vel).sum(axis=1).mean())
-        return scale * z / rms
+        return self._tangent(cp, scale * z / rms)

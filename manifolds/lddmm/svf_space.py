@@ -27,6 +27,7 @@ from ..connection import Connection
 from ..errors import ManifoldError
 from ..numerics.integrators import Integrator, get_integrator
 from ..numerics.optimizers import LBFGSOptions
+from ..point_distance import point_distance
 from ..validation import check_array
 from .control_points import AUTO_THRESHOLD, resolve_control_points
 from .kernels import GaussianKernel
@@ -246,8 +247,8 @@ class SVFLandmarks(Connection):
         """Forget cached registrations."""
         self._cache.clear()
 
-    def inverse_consistency(self, template, shape) -> float:
-        """``|| phi_ST(phi_TS(T)) - T ||_2`` for the registrations ``T -> S`` and ``S -> T``.
+    def inverse_consistency(self, template, shape, distance="rms") -> float:
+        """``d(phi_ST(phi_TS(T)), T)`` for the registrations ``T -> S`` and ``S -> T``.
 
         Each deformation is the flow of the field registered from its own
         template's control points (paper, Table 1). The SVF inverse of
@@ -257,6 +258,8 @@ class SVFLandmarks(Connection):
         Parameters
         ----------
         template, shape : arrays, shape ``(k, d)``
+        distance : {"rms", "frobenius", "mean"} or callable, default "rms"
+            See :func:`manifolds.point_distance.point_distance`.
 
         Returns
         -------
@@ -267,7 +270,7 @@ class SVFLandmarks(Connection):
         forward = self.register(template, shape)
         backward = self.register(shape, template)
         back = self.flow(shape, backward.momenta, forward.deformed)
-        return float(np.sqrt(((back - template) ** 2).sum()))
+        return float(point_distance(distance, self.point_shape)(back, template))
 
     # ------------------------------------------------------------ metric
     def inner(self, point, u, v):
