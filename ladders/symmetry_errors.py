@@ -21,6 +21,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from manifolds.connection import Connection
+
 __all__ = [
     "l2_distance",
     "midpoint_distance",
@@ -39,6 +41,8 @@ def l2_distance(space) -> Distance:
 
     Returns a function ``(a, b) -> ||a - b||_2`` that broadcasts over batch axes.
     """
+    if not isinstance(space, Connection):
+        raise TypeError(f"space: expected a manifolds.Connection, got {type(space).__name__}")
     nd = len(space.point_shape)
 
     def distance(a, b):
@@ -49,6 +53,13 @@ def l2_distance(space) -> Distance:
 
 
 def _distance(space, distance):
+    """Check ``space`` and ``distance``; return the distance function to use."""
+    if not isinstance(space, Connection):
+        raise TypeError(f"space: expected a manifolds.Connection, got {type(space).__name__}")
+    if distance is not None and not callable(distance):
+        raise TypeError(
+            f"distance: expected a callable (a, b) -> distance or None, got {distance!r}"
+        )
     return l2_distance(space) if distance is None else distance
 
 
