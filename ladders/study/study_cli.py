@@ -6,9 +6,19 @@ import argparse
 import contextlib
 import json
 import time
-from pathlib import Path
 
 import numpy as np
+
+from .cli_types import (
+    check_grid_sigma,
+    existing_folder,
+    jobs_count,
+    nonnegative_int,
+    output_folder,
+    positive_float,
+    positive_int,
+    scheduler_address,
+)
 
 __all__ = ["add_study_parser", "run_study_command", "DEFAULT_ALPHA2", "FULL_ALPHA2"]
 
@@ -44,17 +54,23 @@ def add_study_parser(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--output", "-o", default="symladders-output/study", help="results folder")
+    p.add_argument(
+        "--output",
+        "-o",
+        type=output_folder,
+        default="symladders-output/study",
+        help="results folder",
+    )
     p.add_argument(
         "--meshes",
-        type=Path,
+        type=existing_folder,
         default=None,
         help="folder of meshes (atlas.<ext>, <subject>_ed.<ext>, <subject>_es.<ext>; "
         "PLY/OBJ/STL/OFF/VTK) instead of the built-in synthetic cohort",
     )
     p.add_argument(
         "--subjects",
-        type=int,
+        type=positive_int,
         default=None,
         help=f"number of subjects to use (default {DEFAULT_SUBJECTS} built-in, all with --meshes)",
     )
@@ -66,23 +82,33 @@ def add_study_parser(sub) -> None:
     p.add_argument(
         "--alpha2", type=_floats, default=None, help="comma-separated alpha^2 values (eq. 3)"
     )
-    p.add_argument("--vertices", type=int, default=241, help="vertices of the built-in meshes")
-    p.add_argument("--seed", type=int, default=0, help="seed of the built-in cohort")
-    p.add_argument("--sigma", type=float, default=20.0, help="kernel width (mesh units, mm)")
+    p.add_argument(
+        "--vertices", type=positive_int, default=241, help="vertices of the built-in meshes"
+    )
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
+    p.add_argument(
+        "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
+    )
     p.add_argument(
         "--control-points", choices=("grid", "dense"), default="grid", help="control points"
     )
     p.add_argument("--integrator", choices=("euler", "rk2", "rk4"), default="euler")
-    p.add_argument("--n-steps", type=int, default=10, help="time steps of the shooting")
-    p.add_argument("--max-iter", type=int, default=100, help="L-BFGS-B iterations per registration")
-    p.add_argument("--fanning-steps", type=int, default=10, help="steps of the fanning scheme")
+    p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
+    p.add_argument(
+        "--max-iter", type=positive_int, default=100, help="L-BFGS-B iterations per registration"
+    )
+    p.add_argument(
+        "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
+    )
     p.add_argument(
         "--kernel-backend",
         choices=("auto", "numpy", "numba"),
         default="auto",
         help="kernel sums: numba (extra 'fast') when installed, else numpy",
     )
-    p.add_argument("--jobs", "-j", type=int, default=-1, help="parallel workers (-1: all cores)")
+    p.add_argument(
+        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
+    )
     p.add_argument(
         "--backend",
         choices=("loky", "dask"),
@@ -91,6 +117,7 @@ def add_study_parser(sub) -> None:
     )
     p.add_argument(
         "--scheduler",
+        type=scheduler_address,
         default=None,
         help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
     )
@@ -152,6 +179,7 @@ def run_study_command(args) -> int:
 
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
+    check_grid_sigma(cohort.atlas, args.sigma, args.control_points)
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
     config = StudyConfig(
         alpha2=tuple(alpha2),

@@ -29,6 +29,7 @@ from ..validation import check_array
 __all__ = [
     "grid_control_points",
     "grid_size",
+    "check_grid_budget",
     "resolve_control_points",
     "POLICIES",
     "MAX_CONTROL_POINTS",
