@@ -94,6 +94,8 @@ def run_ladder(
     ``end`` and, if ``return_trajectory``, a :class:`LadderTrajectory`.
     """
     n = check_ladder_args(space, n_rungs, scaling_exponent)
+    space.check_point(base, "base")
+    space.check_point(end, "end")
     scale = float(n) ** scaling_exponent
     main, halves = rung_points(space, base, end, n, with_halves=with_halves)
     traj = LadderTrajectory(main_points=main) if return_trajectory else None

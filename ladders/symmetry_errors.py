@@ -63,15 +63,23 @@ def _distance(space, distance):
     return l2_distance(space) if distance is None else distance
 
 
+def _points(space, **points) -> None:
+    """Check each point (shape, finiteness, membership) under the estimator's argument name."""
+    for name, point in points.items():
+        space.check_point(point, name)
+
+
 def midpoint_distance(space, template, shape, distance: Distance | None = None):
     """Distance between the midpoints shot from ``template`` and from ``shape``."""
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape)
     return d(space.midpoint(template, shape), space.midpoint(shape, template))
 
 
 def centrality_error(space, template, shape, distance: Distance | None = None):
     """Centrality ``d(s_M(T), S)`` with ``M = Exp_T(1/2 Log_T S)`` (paper, Section 2.3)."""
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape)
     m = space.midpoint(template, shape)
     return d(space.symmetry(m, template), shape)
 
@@ -79,6 +87,7 @@ def centrality_error(space, template, shape, distance: Distance | None = None):
 def involutivity_error(space, center, point, distance: Distance | None = None):
     """Involutivity ``d(s_M(s_M(P)), P)`` (paper, Section 2.4)."""
     d = _distance(space, distance)
+    _points(space, center=center, point=point)
     return d(space.symmetry(center, space.symmetry(center, point)), point)
 
 
@@ -89,6 +98,7 @@ def transvectivity_error(space, template, shape, other, distance: Distance | Non
     covariant derivative of the curvature, ``nabla R`` (see ``docs/validation.md``).
     """
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape, other=other)
     m = space.midpoint(template, shape)
     ladder = space.transvection(template, m)(other)
     opposite = space.transvection(m, shape)(other)
@@ -136,6 +146,7 @@ def symmetry_errors(
         ``M`` shot from ``T``, applied to ``S'``) and ``transvectivity``.
     """
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape, other=other)
     m = space.midpoint(template, shape)
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)

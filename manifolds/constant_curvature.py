@@ -137,7 +137,8 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         v = self._vector(tangent, "tangent")
         self._batch(point=x, tangent=v)
         v, vv = self._tangent(x, v)
-        out = self._exp(x, v, vv)
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = self._exp(x, v, vv)
         check_finite_result(
             out,
             f"{self.name}: tangent",

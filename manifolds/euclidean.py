@@ -53,14 +53,18 @@ class Euclidean(RiemannianManifold):
 
     def exp(self, point, tangent):
         point, tangent = self._arrays(point=point, tangent=tangent)
+        with np.errstate(over="ignore"):
+            out = point + tangent
         return check_finite_result(
-            point + tangent, f"{self.name}: tangent", "too large: point + tangent overflows"
+            out, f"{self.name}: tangent", "too large: point + tangent overflows"
         )
 
     def log(self, point, other):
         point, other = self._arrays(point=point, other=other)
+        with np.errstate(over="ignore"):
+            out = other - point
         return check_finite_result(
-            other - point, f"{self.name}: other", "too far from point: other - point overflows"
+            out, f"{self.name}: other", "too far from point: other - point overflows"
         )
 
     def inner(self, point, u, v):
@@ -84,8 +88,10 @@ class Euclidean(RiemannianManifold):
 
     def symmetry(self, center, point):
         center, point = self._arrays(center=center, point=point)
+        with np.errstate(over="ignore"):
+            out = 2.0 * center - point
         return check_finite_result(
-            2.0 * center - point, f"{self.name}: point", "too far from center: 2 center - point"
+            out, f"{self.name}: point", "too far from center: 2 center - point"
         )
 
     def parallel_transport(self, point, end, tangent):

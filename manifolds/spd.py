@@ -197,8 +197,10 @@ class SPDMatrices(RiemannianManifold):
         s = np.sqrt(vals)
         x = (_tr(vecs) @ v @ vecs) / (s[..., :, None] * s[..., None, :])
         mu, w = np.linalg.eigh(_sym(x))
+        with np.errstate(over="ignore"):
+            big = np.exp(mu)
         check_finite_result(
-            np.exp(mu),
+            big,
             f"{self.name}: tangent",
             f"too large for exp in float64 (whitened eigenvalues up to {np.max(mu):.4g})",
         )
