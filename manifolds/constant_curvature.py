@@ -61,6 +61,10 @@ class ConstantCurvatureQuadric(RiemannianManifold):
     def form(a, b):
         """The ambient bilinear form over the last axis (broadcasting)."""
 
+    def accurate_form(self, a, b):
+        """The form where cancellation matters (the symmetry); default :meth:`form`."""
+        return self.form(a, b)
+
     @abstractmethod
     def _on_manifold(self, arr, tol):
         """Per batch entry: does ``arr`` (right shape) lie on the quadric within ``tol``?"""
@@ -204,7 +208,8 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         # 2 <m, z> / <m, m> = 2 K <m, z> on the quadric; dividing by the computed
         # <m, m> makes the map an exact linear involution even when m is off the
         # quadric by round-off (which far from the origin is amplified by |<m, z>|).
-        out = (2.0 * self.form(m, z) / self.form(m, m))[..., None] * m - z
+        form = self.accurate_form
+        out = (2.0 * form(m, z) / form(m, m))[..., None] * m - z
         return check_finite_result(out, f"{self.name}: point", "too far from center for float64")
 
     def curvature(self, point, u, v, w):

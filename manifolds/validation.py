@@ -76,7 +76,9 @@ def check_finite(arr: np.ndarray, name: str) -> np.ndarray:
     """Raise if ``arr`` holds NaN or infinite entries."""
     if not np.isfinite(arr).all():
         n_bad = int(arr.size - np.count_nonzero(np.isfinite(arr)))
-        raise ManifoldError(f"{name}: expected finite values, got {n_bad} NaN or infinite value(s)")
+        raise ManifoldError(
+            f"{name}: contains {n_bad} NaN or infinite value(s) (expected finite values)"
+        )
     return arr
 
 
