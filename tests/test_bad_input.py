@@ -20,6 +20,7 @@ from manifolds import (
     SPDMatrices,
     WarpedSurface,
 )
+from manifolds.lddmm.shapes import random_shape
 from manifolds.numerics.optimizers import LBFGSOptions
 
 NAN = np.nan
@@ -274,6 +275,9 @@ SHAPE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
 def lddmm_cases():
     sp = lddmm()
     rows = [
+        ("random_shape-rng", lambda: random_shape(7, 4, 2), TypeError, "rng"),
+        ("random_shape-k", lambda: random_shape(RNG, 0, 2), ManifoldError, "n_landmarks"),
+        ("random_shape-dim", lambda: random_shape(RNG, 4, 4), ManifoldError, "dim"),
         ("sigma-string", lambda: lddmm(sigma="abc"), ManifoldError, "sigma"),
         ("sigma-zero", lambda: lddmm(sigma=0.0), ManifoldError, "sigma"),
         ("sigma-negative", lambda: lddmm(sigma=-1.0), ManifoldError, "sigma"),
