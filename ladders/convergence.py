@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from manifolds.validation import check_float, check_int
+
 __all__ = ["loglog_slope", "ConvergenceCurve", "ladder_convergence"]
 
 
@@ -79,6 +81,14 @@ def ladder_convergence(
         ``error(computed, reference) -> float``; default: relative Euclidean error
         of the coordinates, ``|computed - reference| / |reference|``.
     """
+    if not callable(ladder):
+        raise TypeError(f"ladder: expected a callable such as ladders.pole_ladder, got {ladder!r}")
+    if error is not None and not callable(error):
+        raise TypeError(f"error: expected a callable (computed, reference) -> float, got {error!r}")
+    if isinstance(n_rungs, str | bytes) or not hasattr(n_rungs, "__len__") or len(n_rungs) == 0:
+        raise ValueError(f"n_rungs: expected a non-empty sequence of integers, got {n_rungs!r}")
+    n_rungs = [check_int(n, "n_rungs", minimum=1) for n in n_rungs]
+    check_float(scaling_exponent, "scaling_exponent", minimum=0.0)
     if error is None:
 
         def error(computed, ref):

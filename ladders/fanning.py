@@ -21,8 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from manifolds.errors import ConvergenceError
+from manifolds.connection import Connection
+from manifolds.errors import ConvergenceError, ManifoldError
 from manifolds.lddmm.tangent import LandmarkTangent
+from manifolds.validation import as_float_array, check_finite, check_float, check_int
 
 __all__ = ["FanningResult", "fanning_scheme", "fanning_transport"]
 
@@ -86,9 +88,15 @@ def fanning_scheme(
     -------
     FanningResult
     """
-    c = np.asarray(control_points, dtype=float)
-    mu = np.asarray(geodesic_momenta, dtype=float)
-    w = np.asarray(tangent, dtype=float)
+    n_steps = check_int(n_steps, "n_steps", minimum=1)
+    max_norm_drift = check_float(max_norm_drift, "max_norm_drift", minimum=0.0, strict=True)
+    if epsilon is not None:
+        epsilon = check_float(epsilon, "epsilon", minimum=0.0, strict=True)
+    c = check_finite(as_float_array(control_points, "control_points"), "control_points")
+    if c.ndim != 2 or c.shape[0] == 0:
+        raise ManifoldError(f"control_points: expected shape (n_cp, d), got {c.shape}")
+    mu = as_float_array(geodesic_momenta, "geodesic_momenta")
+    w = as_float_array(tangent, "tangent")
     for name, arr in (("geodesic_momenta", mu), ("tangent", w)):
         if arr.shape != c.shape:
             raise ValueError(
@@ -96,8 +104,6 @@ def fanning_scheme(
             )
         if not np.isfinite(arr).all():
             raise ValueError(f"{name}: contains NaN or infinite values")
-    if int(n_steps) != n_steps or n_steps < 1:
-        raise ValueError(f"n_steps: expected a positive integer, got {n_steps!r}")
     h = 1.0 / n_steps
     eps = h if epsilon is None else float(epsilon)
 
@@ -167,6 +173,12 @@ def fanning_transport(
         flowed to the end of the geodesic); deform a shape with them through
         ``space.shoot(shape, result.momenta, control_points=result.control_points)``.
     """
+    if not hasattr(space, "kernel") or not isinstance(space, Connection):
+        raise TypeError(
+            f"space: expected an LDDMM space (manifolds.LDDMMLandmarks), got {type(space).__name__}"
+        )
+    n_steps = check_int(n_steps, "n_steps", minimum=1)
+    check_float(max_norm_drift, "max_norm_drift", minimum=0.0, strict=True)
     c0, mu0 = _momenta_at(space, base, space.log(base, end))
     c_w, w0 = _momenta_at(space, base, tangent)
     if c_w.shape != c0.shape or not np.array_equal(c_w, c0):

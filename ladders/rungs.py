@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from manifolds.connection import Connection
+from manifolds.validation import check_float, check_int
 
 __all__ = ["LadderTrajectory", "Rung", "check_ladder_args", "rung_points", "run_ladder"]
 
@@ -52,13 +53,8 @@ def check_ladder_args(space, n_rungs, scaling_exponent) -> int:
     """Validate the arguments common to the ladders; return ``n_rungs`` as int."""
     if not isinstance(space, Connection):
         raise TypeError(f"space: expected a manifolds.Connection, got {type(space).__name__}")
-    if isinstance(n_rungs, bool) or int(n_rungs) != n_rungs or n_rungs < 1:
-        raise ValueError(f"n_rungs: expected a positive integer, got {n_rungs!r}")
-    if not np.isfinite(scaling_exponent) or scaling_exponent < 0:
-        raise ValueError(
-            f"scaling_exponent: expected a finite number >= 0, got {scaling_exponent!r}"
-        )
-    return int(n_rungs)
+    check_float(scaling_exponent, "scaling_exponent", minimum=0.0)
+    return check_int(n_rungs, "n_rungs", minimum=1)
 
 
 def rung_points(space, base, end, n_rungs: int, with_halves: bool = True):
@@ -98,6 +94,8 @@ def run_ladder(
     ``end`` and, if ``return_trajectory``, a :class:`LadderTrajectory`.
     """
     n = check_ladder_args(space, n_rungs, scaling_exponent)
+    space.check_point(base, "base")
+    space.check_point(end, "end")
     scale = float(n) ** scaling_exponent
     main, halves = rung_points(space, base, end, n, with_halves=with_halves)
     traj = LadderTrajectory(main_points=main) if return_trajectory else None

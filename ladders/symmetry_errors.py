@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from manifolds.connection import Connection
 from manifolds.point_distance import point_distance
 
 __all__ = [
@@ -46,22 +47,38 @@ def l2_distance(space) -> Callable:
 
     Broadcasts over batch axes; ``point_distance("frobenius", space.point_shape)``.
     """
+    _check_space(space)
     return point_distance("frobenius", space.point_shape)
 
 
+def _check_space(space) -> None:
+    if not isinstance(space, Connection):
+        raise TypeError(f"space: expected a manifolds.Connection, got {type(space).__name__}")
+
+
 def _distance(space, distance):
+    """Check ``space`` and ``distance``; return the distance function to use."""
+    _check_space(space)
     return point_distance("rms" if distance is None else distance, space.point_shape)
+
+
+def _points(space, **points) -> None:
+    """Check each point (shape, finiteness, membership) under the estimator's argument name."""
+    for name, point in points.items():
+        space.check_point(point, name)
 
 
 def midpoint_distance(space, template, shape, distance: Distance = "rms"):
     """Distance between the midpoints shot from ``template`` and from ``shape``."""
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape)
     return d(space.midpoint(template, shape), space.midpoint(shape, template))
 
 
 def centrality_error(space, template, shape, distance: Distance = "rms"):
     """Centrality ``d(s_M(T), S)`` with ``M = Exp_T(1/2 Log_T S)`` (paper, Section 2.3)."""
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape)
     m = space.midpoint(template, shape)
     return d(space.symmetry(m, template), shape)
 
@@ -69,6 +86,7 @@ def centrality_error(space, template, shape, distance: Distance = "rms"):
 def involutivity_error(space, center, point, distance: Distance = "rms"):
     """Involutivity ``d(s_M(s_M(P)), P)`` (paper, Section 2.4)."""
     d = _distance(space, distance)
+    _points(space, center=center, point=point)
     return d(space.symmetry(center, space.symmetry(center, point)), point)
 
 
@@ -79,6 +97,7 @@ def transvectivity_error(space, template, shape, other, distance: Distance = "rm
     covariant derivative of the curvature, ``nabla R`` (see ``docs/validation.md``).
     """
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape, other=other)
     m = space.midpoint(template, shape)
     ladder = space.transvection(template, m)(other)
     opposite = space.transvection(m, shape)(other)
@@ -125,6 +144,7 @@ def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -
         ``M`` shot from ``T``, applied to ``S'``) and ``transvectivity``.
     """
     d = _distance(space, distance)
+    _points(space, template=template, shape=shape, other=other)
     m = space.midpoint(template, shape)
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)

@@ -14,7 +14,13 @@ from abc import abstractmethod
 import numpy as np
 
 from .riemannian import RiemannianManifold
-from .validation import as_float_array, check_finite, check_shape
+from .validation import (
+    as_float_array,
+    check_batch_shapes,
+    check_finite,
+    check_finite_result,
+    check_shape,
+)
 
 __all__ = ["ConstantCurvatureQuadric"]
 
@@ -55,6 +61,10 @@ class ConstantCurvatureQuadric(RiemannianManifold):
     def form(a, b):
         """The ambient bilinear form over the last axis (broadcasting)."""
 
+    def accurate_form(self, a, b):
+        """The form where cancellation matters (the symmetry); default :meth:`form`."""
+        return self.form(a, b)
+
     @abstractmethod
     def _on_manifold(self, arr, tol):
         """Per batch entry: does ``arr`` (right shape) lie on the quadric within ``tol``?"""
@@ -71,6 +81,10 @@ class ConstantCurvatureQuadric(RiemannianManifold):
 
     @abstractmethod
     def _log(self, x, y): ...
+
+    @abstractmethod
+    def _project(self, x):
+        """Put points computed by a closed form back on the quadric (round-off drift)."""
 
     @abstractmethod
     def _transport(self, x, y, u):
@@ -107,6 +121,10 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         check_shape(arr, self.point_shape, label)
         return check_finite(arr, label)
 
+    def _batch(self, **arrays) -> None:
+        """Raise a named error if the batch axes of ``arrays`` do not broadcast."""
+        check_batch_shapes(1, self.name, **arrays)
+
     def exp(self, point, tangent):
         """Exponential map in closed form (accurate for tiny vectors).
 
@@ -120,8 +138,17 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         array, shape ``(..., n + 1)``
         """
         x = self._point(point, "point")
-        v, vv = self._tangent(x, self._vector(tangent, "tangent"))
-        return self._exp(x, v, vv)
+        v = self._vector(tangent, "tangent")
+        self._batch(point=x, tangent=v)
+        v, vv = self._tangent(x, v)
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = self._exp(x, v, vv)
+        check_finite_result(
+            out,
+            f"{self.name}: tangent",
+            f"too large for exp in float64 (largest entry {np.max(np.abs(v)):.4g})",
+        )
+        return self._project(out)
 
     def log(self, point, other):
         """Logarithm map in closed form, accurate for nearby points.
@@ -134,12 +161,16 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         -------
         array, shape ``(..., n + 1)``, tangent at ``point`` of norm ``dist(point, other)``
         """
-        return self._log(self._point(point, "point"), self._point(other, "other"))
+        x, y = self._point(point, "point"), self._point(other, "other")
+        self._batch(point=x, other=y)
+        return self._log(x, y)
 
     def inner(self, point, u, v):
         """The ambient form restricted to tangent vectors, shape ``(...)``."""
-        self._point(point, "point")
-        return self.form(self._vector(u, "u"), self._vector(v, "v"))
+        x = self._point(point, "point")
+        u, v = self._vector(u, "u"), self._vector(v, "v")
+        self._batch(point=x, u=u, v=v)
+        return self.form(u, v)
 
     def parallel_transport(self, point, end, tangent):
         """Exact transport of ``tangent`` along the geodesic ``point -> end`` (closed form).
@@ -155,7 +186,9 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         """
         x = self._point(point, "point")
         y = self._point(end, "end")
-        u, _ = self._tangent(x, self._vector(tangent, "tangent"))
+        u = self._vector(tangent, "tangent")
+        self._batch(point=x, end=y, tangent=u)
+        u, _ = self._tangent(x, u)
         return self._transport(x, y, u)
 
     def squared_dist(self, a, b):
@@ -163,15 +196,27 @@ class ConstantCurvatureQuadric(RiemannianManifold):
         return self.dist(a, b) ** 2
 
     def symmetry(self, center, point):
-        """Geodesic symmetry ``s_m(z) = 2 K <m, z> m - z``."""
+        """Geodesic symmetry ``s_m(z) = 2 K <m, z> m - z``.
+
+        Computed as ``2 <m, z> / <m, m> m - z``, the reflection through the line of
+        ``m``: an exact linear involution that preserves the quadric, so it is not
+        projected (projecting would break ``s_m o s_m = id`` by more than it gains).
+        """
         m = self._point(center, "center")
         z = self._point(point, "point")
-        return (2.0 * self.sectional_curvature) * self.form(m, z)[..., None] * m - z
+        self._batch(center=m, point=z)
+        # 2 <m, z> / <m, m> = 2 K <m, z> on the quadric; dividing by the computed
+        # <m, m> makes the map an exact linear involution even when m is off the
+        # quadric by round-off (which far from the origin is amplified by |<m, z>|).
+        form = self.accurate_form
+        out = (2.0 * form(m, z) / form(m, m))[..., None] * m - z
+        return check_finite_result(out, f"{self.name}: point", "too far from center for float64")
 
     def curvature(self, point, u, v, w):
         """``R(u, v) w = K (<v, w> u - <u, w> v)`` (convention in the class doc)."""
         self._point(point, "point")
         u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
+        self._batch(u=u, v=v, w=w)
         k = self.sectional_curvature
         return k * (self.form(v, w)[..., None] * u - self.form(u, w)[..., None] * v)
 

@@ -4,8 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import ManifoldError
 from .riemannian import RiemannianManifold
-from .validation import check_array
+from .validation import (
+    check_array,
+    check_batch_shapes,
+    check_finite_result,
+    check_float,
+    check_int,
+    check_n_samples,
+    check_rng,
+)
 
 __all__ = ["Euclidean"]
 
@@ -27,52 +36,85 @@ class Euclidean(RiemannianManifold):
     supports_batch = True
 
     def __init__(self, shape):
-        self.point_shape = (int(shape),) if np.isscalar(shape) else tuple(int(s) for s in shape)
-        if any(s <= 0 for s in self.point_shape):
-            raise ValueError(f"Euclidean: shape must be positive, got {self.point_shape}")
+        dims = (shape,) if np.isscalar(shape) else tuple(shape)
+        if len(dims) == 0:
+            raise ManifoldError("Euclidean: shape: expected a positive int or tuple, got ()")
+        self.point_shape = tuple(check_int(s, "Euclidean: shape", minimum=1) for s in dims)
 
     def _axes(self, arr):
         nd = len(self.point_shape)
         return tuple(range(arr.ndim - nd, arr.ndim))
 
+    def _arrays(self, **arrays) -> list[np.ndarray]:
+        """Validated float arrays (shape, finiteness) whose batch axes broadcast."""
+        out = {k: check_array(a, self.point_shape, f"{self.name}: {k}") for k, a in arrays.items()}
+        check_batch_shapes(len(self.point_shape), self.name, **out)
+        return list(out.values())
+
     def exp(self, point, tangent):
-        point = check_array(point, self.point_shape, f"{self.name}: point")
-        tangent = check_array(tangent, self.point_shape, f"{self.name}: tangent")
-        return point + tangent
+        point, tangent = self._arrays(point=point, tangent=tangent)
+        with np.errstate(over="ignore"):
+            out = point + tangent
+        return check_finite_result(
+            out, f"{self.name}: tangent", "too large: point + tangent overflows"
+        )
 
     def log(self, point, other):
-        point = check_array(point, self.point_shape, f"{self.name}: point")
-        other = check_array(other, self.point_shape, f"{self.name}: other")
-        return other - point
+        point, other = self._arrays(point=point, other=other)
+        with np.errstate(over="ignore"):
+            out = other - point
+        return check_finite_result(
+            out, f"{self.name}: other", "too far from point: other - point overflows"
+        )
 
     def inner(self, point, u, v):
-        prod = np.asarray(u, dtype=float) * np.asarray(v, dtype=float)
-        return prod.sum(axis=self._axes(prod))
+        _, u, v = self._arrays(point=point, u=u, v=v)
+        prod = u * v
+        return check_finite_result(
+            prod.sum(axis=self._axes(prod)), f"{self.name}: u, v", "overflow"
+        )
 
     def dist(self, a, b):
-        diff = np.asarray(b, dtype=float) - np.asarray(a, dtype=float)
-        return np.sqrt((diff**2).sum(axis=self._axes(diff)))
+        a, b = self._arrays(a=a, b=b)
+        diff = b - a
+        scale = np.max(np.abs(diff), axis=self._axes(diff), keepdims=True)
+        scale = np.where(scale > 0, scale, 1.0)
+        red = (diff / scale) ** 2
+        return np.squeeze(scale, axis=self._axes(scale)) * np.sqrt(red.sum(axis=self._axes(red)))
 
     def midpoint(self, a, b):
-        return 0.5 * (np.asarray(a, dtype=float) + np.asarray(b, dtype=float))
+        a, b = self._arrays(a=a, b=b)
+        return 0.5 * a + 0.5 * b
 
     def symmetry(self, center, point):
-        return 2.0 * np.asarray(center, dtype=float) - np.asarray(point, dtype=float)
+        center, point = self._arrays(center=center, point=point)
+        with np.errstate(over="ignore"):
+            out = 2.0 * center - point
+        return check_finite_result(
+            out, f"{self.name}: point", "too far from center: 2 center - point"
+        )
 
     def parallel_transport(self, point, end, tangent):
         """Identity: the flat connection transports vectors unchanged."""
-        return np.array(tangent, dtype=float)
+        point, end, tangent = self._arrays(point=point, end=end, tangent=tangent)
+        shape = np.broadcast_shapes(point.shape, end.shape, tangent.shape)
+        return np.array(np.broadcast_to(tangent, shape), dtype=float)
 
     def curvature(self, point, u, v, w):
-        return np.zeros_like(np.asarray(w, dtype=float))
+        arrays = self._arrays(point=point, u=u, v=v, w=w)
+        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
 
     def curvature_derivative(self, point, x, u, v, w):
-        return np.zeros_like(np.asarray(w, dtype=float))
+        arrays = self._arrays(point=point, x=x, u=u, v=v, w=w)
+        return np.zeros(np.broadcast_shapes(*(a.shape for a in arrays)))
 
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
+        n_samples = check_n_samples(n_samples)
         size = self.point_shape if n_samples is None else (n_samples, *self.point_shape)
-        return rng.standard_normal(size)
+        return check_rng(rng).standard_normal(size)
 
     def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
-        shape = np.shape(point)
-        return scale * rng.standard_normal(shape)
+        (point,) = self._arrays(point=point)
+        check_rng(rng)
+        scale = check_float(scale, f"{self.name}: scale", minimum=0.0)
+        return scale * rng.standard_normal(point.shape)

@@ -28,7 +28,7 @@ from .errors import ManifoldError, NotOnManifoldError
 from .numerics.geodesic_ode import GeodesicIntegrator
 from .numerics.shooting import ShootingSolver
 from .riemannian import RiemannianManifold
-from .validation import check_array
+from .validation import check_array, check_float, check_n_samples, check_rng
 
 __all__ = ["MetricField", "christoffel_from_jet"]
 
@@ -343,8 +343,10 @@ class MetricField(RiemannianManifold):
     # ------------------------------------------------------------ sampling
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
         """Uniform in ``sampling_box`` intersected with the domain (rejection)."""
+        n_samples = check_n_samples(n_samples)
+        check_rng(rng)
         low, high = self.sampling_box
-        count = 1 if n_samples is None else int(n_samples)
+        count = 1 if n_samples is None else n_samples
         out = []
         for _ in range(1000 * count):
             x = low + (high - low) * rng.random(self.dim)
@@ -359,6 +361,8 @@ class MetricField(RiemannianManifold):
     def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
         """``scale * L^-T z`` with ``g = L L^T`` and ``z`` standard normal (isotropic in g)."""
         low = np.linalg.cholesky(self.metric(point))
+        check_rng(rng)
+        scale = check_float(scale, f"{self.name}: scale", minimum=0.0)
         return scale * np.linalg.solve(low.T, rng.standard_normal(self.dim))
 
     def __repr__(self) -> str:

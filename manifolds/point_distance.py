@@ -45,7 +45,9 @@ def point_distance(distance, point_shape) -> Distance:
     """
     if callable(distance):
         return distance
-    if not isinstance(distance, str) or distance not in DISTANCES:
+    if not isinstance(distance, str):
+        raise TypeError(f"distance: expected one of {DISTANCES} or a callable, got {distance!r}")
+    if distance not in DISTANCES:
         raise ValueError(f"distance: expected one of {DISTANCES} or a callable, got {distance!r}")
     nd = len(tuple(point_shape))
     if nd == 0:

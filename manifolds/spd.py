@@ -10,9 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ManifoldError, NotOnManifoldError, NotTangentError
+from .errors import NotOnManifoldError, NotTangentError
 from .riemannian import RiemannianManifold
-from .validation import as_float_array, check_finite, check_shape
+from .validation import (
+    as_float_array,
+    check_batch_shapes,
+    check_finite,
+    check_finite_result,
+    check_float,
+    check_n_samples,
+    check_rng,
+    check_shape,
+)
 
 __all__ = ["SPDMatrices"]
 
@@ -145,13 +154,18 @@ class SPDMatrices(RiemannianManifold):
             raise NotTangentError(f"{self.name}: {name} is not a symmetric matrix")
         return _sym(arr)
 
-    def _whiten_other(self, vals, vecs, other, name: str):
+    def _batch(self, **arrays) -> None:
+        """Raise a named error if the batch axes of ``arrays`` do not broadcast."""
+        check_batch_shapes(2, self.name, **arrays)
+
+    def _whiten_other(self, vals, vecs, other, name: str, first: str = "point"):
         """Eigendecomposition of ``P^-1/2 Q P^-1/2`` (in the eigenbasis of ``P``).
 
         ``Q`` is positive definite if and only if this congruent matrix is, so the
         test of its eigenvalues validates ``Q`` without another factorisation.
         """
         q = self._matrix(other, name)
+        check_batch_shapes(2, self.name, **{first: vecs, name: q})
         s = np.sqrt(vals)
         b = (_tr(vecs) @ q @ vecs) / (s[..., :, None] * s[..., None, :])
         mu, w = np.linalg.eigh(_sym(b))
@@ -177,12 +191,21 @@ class SPDMatrices(RiemannianManifold):
         -------
         array, shape ``(..., n, n)``
         """
-        _, vals, vecs = self._eig(point, "point")
+        p, vals, vecs = self._eig(point, "point")
         v = self._vector(tangent, "tangent")
+        self._batch(point=p, tangent=v)
         s = np.sqrt(vals)
         x = (_tr(vecs) @ v @ vecs) / (s[..., :, None] * s[..., None, :])
         mu, w = np.linalg.eigh(_sym(x))
-        return self._unwhiten(s, vecs, _fun(mu, w, np.exp))
+        with np.errstate(over="ignore"):
+            big = np.exp(mu)
+        check_finite_result(
+            big,
+            f"{self.name}: tangent",
+            f"too large for exp in float64 (whitened eigenvalues up to {np.max(mu):.4g})",
+        )
+        out = self._unwhiten(s, vecs, _fun(mu, w, np.exp))
+        return check_finite_result(out, f"{self.name}: tangent", "too large for exp in float64")
 
     def log(self, point, other):
         """Logarithm map ``P^1/2 logm(P^-1/2 Q P^-1/2) P^1/2`` (defined everywhere).
@@ -201,15 +224,17 @@ class SPDMatrices(RiemannianManifold):
 
     def inner(self, point, u, v):
         """``tr(P^-1 U P^-1 V)``, shape ``(...)``."""
-        _, vals, vecs = self._eig(point, "point")
-        ut = _tr(vecs) @ self._vector(u, "u") @ vecs
-        vt = _tr(vecs) @ self._vector(v, "v") @ vecs
+        p, vals, vecs = self._eig(point, "point")
+        u, v = self._vector(u, "u"), self._vector(v, "v")
+        self._batch(point=p, u=u, v=v)
+        ut = _tr(vecs) @ u @ vecs
+        vt = _tr(vecs) @ v @ vecs
         return (ut * vt / (vals[..., :, None] * vals[..., None, :])).sum(axis=(-2, -1))
 
     def dist(self, a, b):
         """``|logm(A^-1/2 B A^-1/2)|_F`` from the eigenvalues of the whitened ``B``."""
         _, vals, vecs = self._eig(a, "a")
-        _, mu, _ = self._whiten_other(vals, vecs, b, "b")
+        _, mu, _ = self._whiten_other(vals, vecs, b, "b", "a")
         return np.sqrt((np.log(mu) ** 2).sum(axis=-1))
 
     def squared_dist(self, a, b):
@@ -219,15 +244,17 @@ class SPDMatrices(RiemannianManifold):
     def midpoint(self, a, b):
         """Geometric mean ``A^1/2 (A^-1/2 B A^-1/2)^1/2 A^1/2`` (paper, Section 2.3)."""
         _, vals, vecs = self._eig(a, "a")
-        s, mu, w = self._whiten_other(vals, vecs, b, "b")
+        s, mu, w = self._whiten_other(vals, vecs, b, "b", "a")
         return self._unwhiten(s, vecs, _fun(mu, w, np.sqrt))
 
     def symmetry(self, center, point):
         """Geodesic symmetry ``s_M(S) = M S^-1 M``, computed as ``(M U) diag(1/l) (M U)^T``."""
         m = self._pd(center, "center")
-        _, vals, vecs = self._eig(point, "point")
+        p, vals, vecs = self._eig(point, "point")
+        self._batch(center=m, point=p)
         k = m @ vecs
-        return _sym((k / vals[..., None, :]) @ _tr(k))
+        out = _sym((k / vals[..., None, :]) @ _tr(k))
+        return check_finite_result(out, f"{self.name}: point", "too close to singular")
 
     def parallel_transport(self, point, end, tangent):
         """Transport ``E U E^T`` along the geodesic ``point -> end``, ``E = P^1/2 W^1/2 P^-1/2``.
@@ -243,7 +270,9 @@ class SPDMatrices(RiemannianManifold):
         """
         _, vals, vecs = self._eig(point, "point")
         s, mu, w = self._whiten_other(vals, vecs, end, "end")
-        u = _tr(vecs) @ self._vector(tangent, "tangent") @ vecs
+        tangent = self._vector(tangent, "tangent")
+        self._batch(point=vecs, end=w, tangent=tangent)
+        u = _tr(vecs) @ tangent @ vecs
         e = s[..., :, None] * _fun(mu, w, np.sqrt) / s[..., None, :]
         return _sym(vecs @ (e @ u @ _tr(e)) @ _tr(vecs))
 
@@ -252,9 +281,9 @@ class SPDMatrices(RiemannianManifold):
         _, vals, vecs = self._eig(point, "point")
         s = np.sqrt(vals)
         den = s[..., :, None] * s[..., None, :]
-        x, y, z = (
-            _tr(vecs) @ self._vector(a, n) @ vecs / den for a, n in ((u, "u"), (v, "v"), (w, "w"))
-        )
+        u, v, w = (self._vector(a, n) for a, n in ((u, "u"), (v, "v"), (w, "w")))
+        self._batch(point=vecs, u=u, v=v, w=w)
+        x, y, z = (_tr(vecs) @ a @ vecs / den for a in (u, v, w))
         xy = x @ y - y @ x
         return self._unwhiten(s, vecs, -0.25 * (xy @ z - z @ xy))
 
@@ -272,14 +301,15 @@ class SPDMatrices(RiemannianManifold):
 
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
         """``expm(G)`` with ``G`` symmetric Gaussian, ``E|G|_F^2 = 1``."""
-        lead = () if n_samples is None else (int(n_samples),)
-        vals, vecs = np.linalg.eigh(self._gaussian_sym(rng, lead, 1.0))
+        n_samples = check_n_samples(n_samples)
+        lead = () if n_samples is None else (n_samples,)
+        vals, vecs = np.linalg.eigh(self._gaussian_sym(check_rng(rng), lead, 1.0))
         return _sym(_fun(vals, vecs, np.exp))
 
     def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
         """``P^1/2 G P^1/2`` with ``G`` symmetric Gaussian, so ``E|V|_P^2 = scale^2``."""
         _, vals, vecs = self._eig(point, "point")
-        if not np.isfinite(scale) or scale < 0:
-            raise ManifoldError(f"{self.name}: scale must be finite and >= 0, got {scale!r}")
+        check_rng(rng)
+        scale = check_float(scale, f"{self.name}: scale", minimum=0.0)
         g = self._gaussian_sym(rng, vals.shape[:-1], scale)
         return self._unwhiten(np.sqrt(vals), vecs, g)

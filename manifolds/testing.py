@@ -15,6 +15,13 @@ space is Riemannian), batching (when it broadcasts), bad-input errors, and,
 for a space claiming ``is_symmetric``, an exact one-rung pole ladder and zero
 transvectivity. Tolerances, sampling sizes and how tangents are compared
 (``tangent_arrays``, ``corrupt_tangent``) are class attributes and hooks to set.
+
+Far from the base point: with ``far_scale > 0`` the centre is first moved by a
+random tangent of size ``far_scale`` (e.g. 6 on the hyperbolic space, where the
+coordinates then grow like ``e^6``) and the same properties are checked there
+with the relative tolerance ``far_rtol``: results stay on the manifold (within
+``membership_atol``), ``log o exp`` and ``s_m o s_m`` are the identity, ``s_m``
+fixes ``m``. ``far_scale = 0`` (the default) skips these checks.
 """
 
 from __future__ import annotations
@@ -56,6 +63,8 @@ class ConnectionContract:
     max_examples = 25
     n_batch = 5
     membership_atol = 1e-8
+    far_scale = 0.0
+    far_rtol = 1e-8
 
     # ------------------------------------------------------------- helpers
     def given_seed(self, check):
@@ -274,6 +283,54 @@ class ConnectionContract:
             checks.append((sp.inner(a, v, v), [sp.inner(x, y, y) for x, y in zip(a, v)]))
         for batched, looped in checks:
             np.testing.assert_allclose(batched, np.stack(looped), rtol=1e-12, atol=1e-13)
+
+    # ------------------------------------------------------------- far from the base point
+    def far_triple(self, rng):
+        """``(m, p, v)``: a centre ``m`` at ~``far_scale`` from a random point, ``p = Exp_m(v)``."""
+        a = self.space.random_point(rng)
+        m = self.space.exp(a, self.space.random_tangent(a, rng, scale=self.far_scale))
+        v = self.space.random_tangent(m, rng, scale=self.tangent_scale)
+        return m, self.space.exp(m, v), v
+
+    def assert_close_relative(self, x, y):
+        """``x == y`` up to ``far_rtol`` relative to the largest entry of ``y``."""
+        for a, b in zip(self.tangent_arrays(x), self.tangent_arrays(y), strict=True):
+            scale = max(float(np.max(np.abs(b))), 1.0)
+            np.testing.assert_allclose(a, b, rtol=0, atol=self.far_rtol * scale)
+
+    def skip_unless_far(self):
+        if not self.far_scale:
+            pytest.skip("far_scale = 0: no far-from-base checks for this space")
+
+    def test_far_points_stay_on_manifold(self):
+        self.skip_unless_far()
+
+        def check(rng):
+            m, p, _ = self.far_triple(rng)
+            s = self.space.symmetry(m, p)
+            for q in (m, p, s, self.space.symmetry(m, s), self.space.midpoint(m, p)):
+                assert np.all(self.space.belongs(q, atol=self.membership_atol))
+
+        self.given_seed(check)
+
+    def test_far_log_of_exp(self):
+        self.skip_unless_far()
+
+        def check(rng):
+            m, p, v = self.far_triple(rng)
+            self.assert_close_relative(self.space.log(m, p), v)
+
+        self.given_seed(check)
+
+    def test_far_symmetry_is_involution_fixing_center(self):
+        self.skip_unless_far()
+
+        def check(rng):
+            m, p, _ = self.far_triple(rng)
+            self.assert_close_relative(self.space.symmetry(m, self.space.symmetry(m, p)), p)
+            self.assert_close_relative(self.space.symmetry(m, m), m)
+
+        self.given_seed(check)
 
     def test_nan_input_raises(self):
         rng = np.random.default_rng(3)

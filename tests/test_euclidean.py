@@ -11,6 +11,7 @@ class TestEuclideanVector(ConnectionContract):
 
 class TestEuclideanPDM(ConnectionContract):
     space = Euclidean((7, 3))
+    far_scale = 1000.0
 
     def test_symmetry_closed_form(self):
         rng = np.random.default_rng(0)

@@ -15,11 +15,13 @@ def unit_tangent(space, x, rng):
 
 class TestHypersphere2(ConnectionContract):
     space = Hypersphere(2)
+    far_scale = 2.5
     tangent_scale = 0.8
 
 
 class TestHypersphere5(ConnectionContract):
     space = Hypersphere(5)
+    far_scale = 2.5
     tangent_scale = 1.0
 
     def test_dist_is_arccos_of_dot(self):

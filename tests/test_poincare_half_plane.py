@@ -45,6 +45,7 @@ def sample(seed, scale=0.8):
 
 class TestPoincareHalfPlane(ConnectionContract):
     space = SPACE
+    far_scale = 1.5
     rtol = 1e-8
     atol = 1e-8
     max_examples = 5

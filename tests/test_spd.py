@@ -11,10 +11,12 @@ from manifolds.testing import ConnectionContract, assert_curvature_matches_dista
 
 class TestSPD2(ConnectionContract):
     space = SPDMatrices(2)
+    far_scale = 4.0
 
 
 class TestSPD3(ConnectionContract):
     space = SPDMatrices(3)
+    far_scale = 4.0
     tangent_scale = 1.0
     rtol = 1e-9
     atol = 1e-9

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import build_parser, main
+from ladders.study.cli_types import UsageError
 from ladders.study.pipeline import ERROR_NAMES, VARIANTS, StudyConfig, make_space, run_subject
 from ladders.study.synthetic_lv import make_synthetic_cohort
 from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks
@@ -41,7 +42,7 @@ def test_config_builds_the_chosen_space_and_keeps_lddmm_hashes():
 def test_cli_deformation_flag(tmp_path):
     args = build_parser().parse_args(["study", "--deformation", "svf"])
     assert args.deformation == "svf"
-    with pytest.raises(SystemExit):
+    with pytest.raises(UsageError, match="--deformation"):
         build_parser().parse_args(["study", "--deformation", "stationary"])
     out = tmp_path / "svf"
     argv = ["study", "--subjects", "2", "--vertices", "40", "--alpha2", "1", "--max-iter", "20"]

@@ -29,6 +29,7 @@ def two_d_curvature(space, point, kappa, u, v, w):
 
 class TestWarpedSurface(ConnectionContract):
     space = WarpedSurface()
+    far_scale = 1.5
     rtol = 1e-8
     atol = 1e-8
     max_examples = 5

@@ -12,6 +12,18 @@ from pathlib import Path
 
 import numpy as np
 
+from .cli_types import (
+    UsageError,
+    check_grid_sigma,
+    existing_folder,
+    jobs_count,
+    nonnegative_int,
+    output_folder,
+    positive_float,
+    positive_int,
+    scheduler_address,
+)
+
 __all__ = ["add_study_parser", "run_study_command", "DEFAULT_ALPHA2", "FULL_ALPHA2"]
 
 FULL_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
@@ -46,11 +58,17 @@ def add_study_parser(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
-    p.add_argument("--output", "-o", default="symladders-output/study", help="results folder")
+    p.add_argument(
+        "--output",
+        "-o",
+        type=output_folder,
+        default="symladders-output/study",
+        help="results folder",
+    )
     source = p.add_mutually_exclusive_group()
     source.add_argument(
         "--meshes",
-        type=Path,
+        type=existing_folder,
         default=None,
         help="folder of meshes (atlas.<ext>, <subject>_ed.<ext>, <subject>_es.<ext>; "
         "PLY/OBJ/STL/OFF/VTK/VTU/VTP) instead of the built-in synthetic cohort",
@@ -71,7 +89,7 @@ def add_study_parser(sub) -> None:
     )
     p.add_argument(
         "--subjects",
-        type=int,
+        type=positive_int,
         default=None,
         help=f"number of subjects to use (default {DEFAULT_SUBJECTS} built-in, all with --meshes)",
     )
@@ -83,9 +101,13 @@ def add_study_parser(sub) -> None:
     p.add_argument(
         "--alpha2", type=_floats, default=None, help="comma-separated alpha^2 values (eq. 3)"
     )
-    p.add_argument("--vertices", type=int, default=241, help="vertices of the built-in meshes")
-    p.add_argument("--seed", type=int, default=0, help="seed of the built-in cohort")
-    p.add_argument("--sigma", type=float, default=20.0, help="kernel width (mesh units, mm)")
+    p.add_argument(
+        "--vertices", type=positive_int, default=241, help="vertices of the built-in meshes"
+    )
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
+    p.add_argument(
+        "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
+    )
     p.add_argument(
         "--control-points", choices=("grid", "dense"), default="grid", help="control points"
     )
@@ -101,9 +123,13 @@ def add_study_parser(sub) -> None:
         help="unit of the errors: per-vertex RMS (the paper's mm), Frobenius or mean distance",
     )
     p.add_argument("--integrator", choices=("euler", "rk2", "rk4"), default="euler")
-    p.add_argument("--n-steps", type=int, default=10, help="time steps of the shooting")
-    p.add_argument("--max-iter", type=int, default=100, help="L-BFGS-B iterations per registration")
-    p.add_argument("--fanning-steps", type=int, default=10, help="steps of the fanning scheme")
+    p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
+    p.add_argument(
+        "--max-iter", type=positive_int, default=100, help="L-BFGS-B iterations per registration"
+    )
+    p.add_argument(
+        "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
+    )
     p.add_argument(
         "--deformation",
         choices=("lddmm", "svf"),
@@ -116,7 +142,9 @@ def add_study_parser(sub) -> None:
         default="auto",
         help="kernel sums: 'auto' uses numba when it imports, else numpy (the reference)",
     )
-    p.add_argument("--jobs", "-j", type=int, default=-1, help="parallel workers (-1: all cores)")
+    p.add_argument(
+        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
+    )
     p.add_argument(
         "--backend",
         choices=("loky", "dask"),
@@ -125,6 +153,7 @@ def add_study_parser(sub) -> None:
     )
     p.add_argument(
         "--scheduler",
+        type=scheduler_address,
         default=None,
         help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
     )
@@ -144,7 +173,7 @@ def _load_cohort(args):
 
     n = args.subjects
     if args.atlas is not None and args.meshes is None and args.cohort is None:
-        raise SystemExit("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
+        raise UsageError("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
     if args.meshes is not None or args.cohort is not None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", UnusedMeshFilesWarning)
@@ -235,6 +264,7 @@ def run_study_command(args) -> int:
 
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
+    check_grid_sigma(cohort.atlas, args.sigma, args.control_points)
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
     config = StudyConfig(
         alpha2=tuple(alpha2),

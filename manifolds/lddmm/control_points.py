@@ -9,6 +9,14 @@ momenta:
   ``sigma = 0.5`` gets 5 x 3 x 3 = 45 points);
 * ``"auto"``: dense up to ``auto_threshold`` vertices, grid above;
 * an array of shape ``(n_cp, d)``: the same user-given points for every template.
+
+A grid has a budget, ``MAX_CONTROL_POINTS = 20000`` points by default: the
+cost of a registration grows like ``n_cp^2`` (kernel sums), and a grid beyond
+that size almost always comes from a ``sigma`` given in the wrong unit (e.g.
+``sigma = 0.01`` for meshes in millimetres). The count is computed from the
+bounding box before anything is allocated, and a clear error names ``sigma``,
+the shape's extent and the count. The budget is a parameter
+(``max_points`` here, ``max_control_points`` of :class:`~manifolds.lddmm.LDDMMLandmarks`).
 """
 
 from __future__ import annotations
@@ -18,13 +26,58 @@ import numpy as np
 from ..errors import ManifoldError
 from ..validation import check_array
 
-__all__ = ["grid_control_points", "resolve_control_points", "POLICIES"]
+__all__ = [
+    "grid_control_points",
+    "grid_size",
+    "check_grid_budget",
+    "resolve_control_points",
+    "POLICIES",
+    "MAX_CONTROL_POINTS",
+]
 
 POLICIES = ("dense", "grid", "auto")
 AUTO_THRESHOLD = 1000
+MAX_CONTROL_POINTS = 20_000
 
 
-def grid_control_points(points: np.ndarray, spacing: float) -> np.ndarray:
+def grid_size(points: np.ndarray, spacing: float) -> tuple[np.ndarray, float]:
+    """Nodes per axis ``floor(extent / spacing) + 1`` and their product, as floats.
+
+    Computed in floating point so that a tiny ``spacing`` cannot overflow.
+
+    Parameters
+    ----------
+    points : array, shape ``(k, d)``
+    spacing : float
+
+    Returns
+    -------
+    per_axis : array, shape ``(d,)``
+    total : float
+    """
+    extent = np.ptp(np.asarray(points, dtype=float), axis=0)
+    per_axis = np.floor(extent / spacing + 1e-9) + 1.0
+    return per_axis, float(np.prod(per_axis))
+
+
+def check_grid_budget(points: np.ndarray, spacing: float, max_points: int) -> None:
+    """Raise a :class:`ManifoldError` if the grid of ``spacing`` over ``points`` is too big."""
+    per_axis, total = grid_size(points, spacing)
+    if total > max_points:
+        extent = np.ptp(np.asarray(points, dtype=float), axis=0)
+        raise ManifoldError(
+            f"sigma: a grid of control points of spacing sigma = {spacing:g} over the "
+            f"shape's extent {' x '.join(f'{e:.4g}' for e in extent)} would have "
+            f"{total:.3g} points ({' x '.join(f'{n:.0f}' for n in per_axis)}), above the "
+            f"budget of {max_points} (max_control_points). sigma is in the shapes' units: "
+            f"is it given in the wrong unit (e.g. m or cm for meshes in mm)? Use a sigma "
+            f"comparable to the extent, or raise max_control_points."
+        )
+
+
+def grid_control_points(
+    points: np.ndarray, spacing: float, max_points: int = MAX_CONTROL_POINTS
+) -> np.ndarray:
     """Regular grid of step ``spacing`` covering the bounding box of ``points``.
 
     Along each axis the grid has ``floor(extent / spacing) + 1`` nodes centred
@@ -34,12 +87,15 @@ def grid_control_points(points: np.ndarray, spacing: float) -> np.ndarray:
     ----------
     points : array, shape ``(k, d)``
     spacing : float
+    max_points : int, default ``MAX_CONTROL_POINTS``
+        Budget: raise before allocating if the grid would be larger.
 
     Returns
     -------
     array, shape ``(n_cp, d)``
     """
     points = np.asarray(points, dtype=float)
+    check_grid_budget(points, spacing, max_points)
     lo, hi = points.min(axis=0), points.max(axis=0)
     axes = []
     for a, b in zip(lo, hi):
@@ -55,6 +111,7 @@ def resolve_control_points(
     policy,
     sigma: float,
     auto_threshold: int = AUTO_THRESHOLD,
+    max_points: int = MAX_CONTROL_POINTS,
 ) -> np.ndarray:
     """Control points for ``template`` under ``policy``.
 
@@ -66,6 +123,8 @@ def resolve_control_points(
         Kernel width, the grid spacing.
     auto_threshold : int
         Largest vertex count for which ``"auto"`` chooses ``"dense"``.
+    max_points : int
+        Budget of a grid (see the module docstring).
 
     Returns
     -------
@@ -77,7 +136,7 @@ def resolve_control_points(
         if policy == "dense":
             return template
         if policy == "grid":
-            return grid_control_points(template, sigma)
+            return grid_control_points(template, sigma, max_points)
         raise ManifoldError(
             f"control_points: unknown policy {policy!r}; use one of {POLICIES} or an array"
         )

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import ManifoldError
+from ..validation import check_float, check_int
 
 __all__ = ["GaussianKernel", "numba_available"]
 
@@ -58,14 +59,14 @@ class GaussianKernel:
     """
 
     def __init__(self, sigma: float, backend: str = "auto", block_size: int | None = None):
-        sigma = float(sigma)
-        if not np.isfinite(sigma) or sigma <= 0:
-            raise ManifoldError(f"GaussianKernel: sigma must be a positive number, got {sigma}")
+        sigma = check_float(sigma, "GaussianKernel: sigma", minimum=0.0, strict=True)
         self.sigma = sigma
         self.inv_s2 = 1.0 / sigma**2
-        self.block_size = int(DEFAULT_BLOCK_SIZE if block_size is None else block_size)
-        if self.block_size < 1:
-            raise ManifoldError(f"GaussianKernel: block_size must be >= 1, got {block_size}")
+        self.block_size = check_int(
+            DEFAULT_BLOCK_SIZE if block_size is None else block_size,
+            "GaussianKernel: block_size",
+            minimum=1,
+        )
         if backend not in ("auto", "numpy", "numba"):
             raise ManifoldError(
                 f"GaussianKernel: backend must be 'auto', 'numpy' or 'numba', got {backend!r}"

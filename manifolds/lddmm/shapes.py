@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import ManifoldError
+from ..validation import check_int, check_rng
+
 __all__ = ["random_shape"]
 
 
@@ -24,7 +27,11 @@ def random_shape(rng: np.random.Generator, n_landmarks: int, dim: int) -> np.nda
     -------
     array, shape ``(n_landmarks, dim)``
     """
-    k, d = int(n_landmarks), int(dim)
+    check_rng(rng)
+    k = check_int(n_landmarks, "n_landmarks", minimum=1)
+    d = check_int(dim, "dim", minimum=2)
+    if d > 3:
+        raise ManifoldError(f"dim: expected 2 or 3, got {dim!r}")
     if d == 2:
         theta = 2 * np.pi * (np.arange(k) + rng.uniform()) / k
         u = np.stack([np.cos(theta), np.sin(theta)], axis=1)

@@ -23,8 +23,15 @@ from ..errors import ManifoldError
 from ..numerics.integrators import Integrator, get_integrator
 from ..numerics.optimizers import LBFGSOptions
 from ..point_distance import point_distance
-from ..validation import check_array
-from .control_points import AUTO_THRESHOLD, resolve_control_points
+from ..validation import (
+    check_array,
+    check_finite_result,
+    check_float,
+    check_int,
+    check_n_samples,
+    check_rng,
+)
+from .control_points import AUTO_THRESHOLD, MAX_CONTROL_POINTS, resolve_control_points
 from .kernels import GaussianKernel
 from .registration import RegistrationResult, register
 from .shapes import random_shape
@@ -68,6 +75,10 @@ class LDDMMLandmarks(Connection):
         the policy's control points. ``log`` then returns a
         :class:`~manifolds.lddmm.LandmarkTangent` carrying its control points;
         ``exp`` accepts those and plain momenta at the policy's control points.
+    max_control_points : int, default 20000
+        Budget of a grid of control points: a ``sigma`` so small against the
+        template's extent that the grid would exceed it raises an error before
+        anything is allocated (see :mod:`manifolds.lddmm.control_points`).
     """
 
     is_symmetric = False
@@ -89,20 +100,22 @@ class LDDMMLandmarks(Connection):
         auto_threshold: int = AUTO_THRESHOLD,
         precondition: bool = True,
         optimize_control_points: bool = False,
+        max_control_points: int = MAX_CONTROL_POINTS,
     ):
-        if int(n_landmarks) != n_landmarks or n_landmarks < 1:
-            raise ManifoldError(f"LDDMMLandmarks: n_landmarks must be >= 1, got {n_landmarks}")
-        if dim not in (2, 3):
-            raise ManifoldError(f"LDDMMLandmarks: dim must be 2 or 3, got {dim}")
-        alpha = float(alpha)
-        if not np.isfinite(alpha) or alpha < 0:
-            raise ManifoldError(f"LDDMMLandmarks: alpha must be >= 0, got {alpha}")
-        if int(n_steps) != n_steps or n_steps < 1:
-            raise ManifoldError(f"LDDMMLandmarks: n_steps must be >= 1, got {n_steps}")
-        self.point_shape = (int(n_landmarks), int(dim))
+        name = "LDDMMLandmarks"
+        n_landmarks = check_int(n_landmarks, f"{name}: n_landmarks", minimum=1)
+        if isinstance(dim, bool) or dim not in (2, 3):
+            raise ManifoldError(f"{name}: dim: expected 2 or 3, got {dim!r}")
+        sigma = check_float(sigma, f"{name}: sigma", minimum=0.0, strict=True)
+        alpha = check_float(alpha, f"{name}: alpha", minimum=0.0)
+        n_steps = check_int(n_steps, f"{name}: n_steps", minimum=1)
+        self.point_shape = (n_landmarks, int(dim))
         self.kernel = GaussianKernel(sigma, backend=backend, block_size=block_size)
         self.sigma = self.kernel.sigma
         self.alpha = alpha
+        self.max_control_points = check_int(
+            max_control_points, f"{name}: max_control_points", minimum=1
+        )
         if isinstance(control_points, str):
             resolve_control_points(np.zeros((1, dim)), control_points, self.sigma)
             self.control_points_policy = control_points
@@ -114,12 +127,10 @@ class LDDMMLandmarks(Connection):
                     f"got {self.control_points_policy.shape}"
                 )
         self.integrator = get_integrator(integrator)
-        self.n_steps = int(n_steps)
-        if isinstance(optimizer, dict):
-            optimizer = LBFGSOptions(**optimizer)
-        self.optimizer = LBFGSOptions() if optimizer is None else optimizer
-        self.cache_size = int(cache_size)
-        self.auto_threshold = int(auto_threshold)
+        self.n_steps = n_steps
+        self.optimizer = LBFGSOptions.coerce(optimizer, f"{name}: optimizer")
+        self.cache_size = check_int(cache_size, f"{name}: cache_size", minimum=0)
+        self.auto_threshold = check_int(auto_threshold, f"{name}: auto_threshold", minimum=0)
         self.precondition = bool(precondition)
         self.optimize_control_points = bool(optimize_control_points)
         self._cache: OrderedDict = OrderedDict()
@@ -141,7 +152,11 @@ class LDDMMLandmarks(Connection):
         """Control points ``c(T)`` of the template ``point``, shape ``(n_cp, d)``."""
         point = self.check_point(point)
         return resolve_control_points(
-            point, self.control_points_policy, self.sigma, self.auto_threshold
+            point,
+            self.control_points_policy,
+            self.sigma,
+            self.auto_threshold,
+            self.max_control_points,
         )
 
     def kernel_matrix(self, control_points) -> np.ndarray:
@@ -207,7 +222,11 @@ class LDDMMLandmarks(Connection):
         template = self.check_point(template, "template")
         if control_points is None:
             cp = resolve_control_points(
-                template, self.control_points_policy, self.sigma, self.auto_threshold
+                template,
+                self.control_points_policy,
+                self.sigma,
+                self.auto_threshold,
+                self.max_control_points,
             )
         else:
             cp = check_array(control_points, (self.point_shape[1],), f"{self.name}: control_points")
@@ -223,6 +242,12 @@ class LDDMMLandmarks(Connection):
             return_trajectory=return_trajectory,
         )
         deformed = res.control_points if dense else res.points
+        check_finite_result(
+            deformed,
+            f"{self.name}: momenta (tangent)",
+            f"the shooting diverged (largest momentum {np.max(np.abs(momenta)):.4g}, "
+            f"sigma {self.sigma:g}): momenta too large for the kernel width",
+        )
         return (deformed, res.trajectory) if return_trajectory else deformed
 
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
@@ -401,14 +426,18 @@ class LDDMMLandmarks(Connection):
     # ------------------------------------------------------------ sampling
     def random_point(self, rng: np.random.Generator, n_samples: int | None = None):
         """A smooth random shape of ``k`` landmarks (:func:`manifolds.lddmm.shapes.random_shape`)."""
+        n_samples = check_n_samples(n_samples)
+        check_rng(rng)
         k, d = self.point_shape
         if n_samples is not None:
-            return np.stack([random_shape(rng, k, d) for _ in range(int(n_samples))])
+            return np.stack([random_shape(rng, k, d) for _ in range(n_samples)])
         return random_shape(rng, k, d)
 
     def random_tangent(self, point, rng: np.random.Generator, scale: float = 1.0):
         """Random momenta at ``c(point)`` whose velocity at the control points has RMS ``scale``."""
         cp = self.control_points(point)
+        check_rng(rng)
+        scale = check_float(scale, f"{self.name}: scale", minimum=0.0)
         z = rng.standard_normal(cp.shape)
         vel = self.kernel.convolve(cp, cp, z)
         rms = np.sqrt((vel * vel).sum(axis=1).mean())

@@ -19,6 +19,9 @@ import numpy as np
 import scipy.optimize
 import threadpoolctl
 
+from ..errors import ManifoldError
+from ..validation import check_float, check_int
+
 __all__ = ["LBFGSOptions", "OptimizationResult", "minimize_lbfgsb", "limit_blas_threads"]
 
 
@@ -73,6 +76,33 @@ class LBFGSOptions:
     max_corrections: int = 100
     max_line_search: int = 30
     blas_threads: int | None = 1
+
+    def __post_init__(self):
+        for key in ("max_iter", "max_corrections", "max_line_search"):
+            check_int(getattr(self, key), f"LBFGSOptions: {key}", minimum=1)
+        for key in ("ftol", "gtol"):
+            check_float(getattr(self, key), f"LBFGSOptions: {key}", minimum=0.0)
+        if self.blas_threads is not None:
+            check_int(self.blas_threads, "LBFGSOptions: blas_threads", minimum=1)
+
+    @classmethod
+    def coerce(cls, options, name: str = "optimizer") -> LBFGSOptions:
+        """``options`` as LBFGSOptions: None (defaults), a dict of fields, or an instance."""
+        if options is None:
+            return cls()
+        if isinstance(options, cls):
+            return options
+        if not isinstance(options, dict):
+            raise TypeError(
+                f"{name}: expected LBFGSOptions, a dict or None, got {type(options).__name__}"
+            )
+        unknown = sorted(set(options) - set(cls.__dataclass_fields__))
+        if unknown:
+            raise ManifoldError(
+                f"{name}: unknown option(s) {unknown}; expected keys among "
+                f"{sorted(cls.__dataclass_fields__)}"
+            )
+        return cls(**options)
 
 
 @dataclass
