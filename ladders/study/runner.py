@@ -105,11 +105,8 @@ def compute_pair(
     With ``meshes`` (a folder) the pair's shapes and strain maps are written
     there as ``.vtu`` files (:func:`ladders.study.mesh_outputs.write_subject_meshes`).
 
-    Registrations stopped by the iteration limit are counted in
-    ``non_converged_registrations`` rather than warned once per call. The count
-    is taken from the warnings, whose capture is process-wide: with a
-    thread-based backend (Dask workers with several threads) concurrent pairs
-    may count one another's warnings, so it is exact only with process workers.
+    Registrations stopped by the iteration limit are counted by the space
+    itself (``non_converged_registrations``) rather than warned once per call.
     """
     start = time.perf_counter()
     las_subject = area_strain(subject.ed, subject.es, faces)
@@ -126,9 +123,6 @@ def compute_pair(
         if not issubclass(w.category, ConvergenceWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     out["status"] = "ok"
-    out["non_converged_registrations"] = sum(
-        issubclass(w.category, ConvergenceWarning) for w in caught
-    )
     out["kernel_backend"] = GaussianKernel(config.sigma, backend=config.kernel_backend).backend
     out["seconds"] = time.perf_counter() - start
     return out

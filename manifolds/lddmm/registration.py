@@ -81,7 +81,7 @@ class RegistrationResult:
     message: str = ""
 
 
-def _is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
+def is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
     return control_points is template or (
         control_points.shape == template.shape and np.array_equal(control_points, template)
     )
@@ -118,7 +118,7 @@ def registration_objective(
     deformed : array, shape ``(k, d)``, ``phi_1(T)``
     rkhs_sq : float, ``||v_0||_H^2``
     """
-    dense = not control_points_gradient and _is_dense(template, control_points)
+    dense = not control_points_gradient and is_dense(template, control_points)
     res = shoot(
         kernel,
         control_points,
@@ -200,7 +200,7 @@ def register(
     template = np.asarray(template, dtype=float)
     target = np.asarray(target, dtype=float)
     cp = template if control_points is None else np.asarray(control_points, dtype=float)
-    dense = _is_dense(template, cp)
+    dense = is_dense(template, cp)
     n_cp, dim = cp.shape
     alpha = float(alpha)
     pre = make_preconditioner(kernel, template, cp, alpha, dense, precondition, rel_ridge)
@@ -220,7 +220,7 @@ def register(
     problem.scale = f_init if f_init > 0 else 1.0
     opt = minimize_lbfgsb(problem.fun_and_grad, x0, options)
     mu, c = problem.unpack(opt.x)
-    result = _result(target, c, mu, problem.evaluate(opt.x), opt, problem.scale)
+    result = make_result(target, c, mu, problem.evaluate(opt.x), opt, problem.scale)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
@@ -294,7 +294,7 @@ class _Problem:
         return value / self.scale, np.concatenate([g_z, (self.c_scale * g_c).ravel()]) / self.scale
 
 
-def _result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:
+def make_result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:
     """Assemble a :class:`RegistrationResult` from the final evaluation and the optimiser's run."""
     value, _, deformed, rkhs_sq = evaluation
     resid = target - deformed

@@ -26,7 +26,7 @@ from ..numerics.integrators import Integrator
 from ..numerics.optimizers import LBFGSOptions, minimize_lbfgsb
 from .kernels import GaussianKernel
 from .preconditioner import make_preconditioner
-from .registration import RegistrationResult, _is_dense
+from .registration import RegistrationResult, is_dense, make_result
 from .stationary_flow import kernel_flow, kernel_flow_vjp
 
 __all__ = ["svf_objective", "register_svf"]
@@ -103,7 +103,7 @@ def register_svf(
     cp = template if control_points is None else np.asarray(control_points, dtype=float)
     n_cp, dim = cp.shape
     alpha = float(alpha)
-    dense = _is_dense(template, cp)
+    dense = is_dense(template, cp)
     pre = make_preconditioner(kernel, template, cp, alpha, dense, precondition, rel_ridge)
     if initial_momenta is not None:
         m0 = np.asarray(initial_momenta, dtype=float).reshape(n_cp, dim)
@@ -128,36 +128,15 @@ def register_svf(
         return value / scale, pre.gradient_to_variables(g_m).ravel() / scale
 
     opt = minimize_lbfgsb(fun_and_grad, z0, options)
-    value, _, deformed, norm_sq = evaluate(opt.x)
     momenta = pre.to_momenta(opt.x.reshape(n_cp, dim))
-    result = _result(opt, momenta, cp, target, deformed, value, norm_sq, scale)
+    result = make_result(target, cp, momenta, evaluate(opt.x), opt, scale)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
                 f"SVF registration did not converge after {opt.n_iter} iterations "
-                f"({opt.message}); objective {value:.6g}, RMS residual {result.rms_error:.3g}"
+                f"({opt.message}); objective {result.objective:.6g}, "
+                f"RMS residual {result.rms_error:.3g}"
             ),
             stacklevel=2,
         )
     return result
-
-
-def _result(opt, momenta, cp, target, deformed, value, norm_sq, scale) -> RegistrationResult:
-    """The :class:`RegistrationResult` of a finished optimisation."""
-    resid = target - deformed
-    err = float(np.sqrt((resid * resid).sum()))
-    return RegistrationResult(
-        momenta=momenta,
-        control_points=cp.copy(),
-        deformed=deformed,
-        residual=resid,
-        objective=value,
-        registration_error=err,
-        rms_error=err / np.sqrt(target.shape[0]),
-        rkhs_norm=float(np.sqrt(max(norm_sq, 0.0))),
-        n_iter=opt.n_iter,
-        n_evals=opt.n_evals,
-        history=[h * scale for h in opt.history],
-        converged=opt.converged,
-        message=opt.message,
-    )
