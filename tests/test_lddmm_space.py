@@ -129,3 +129,17 @@ def test_ladders_and_symmetry_errors_run_on_the_space():
     for name in ("midpoint_distance", "centrality", "involutivity"):
         assert 0 <= errs[name] < 1e-3 * size, (name, errs[name])
     assert 0 <= errs["transvectivity"] < 0.1 * size
+
+
+def test_finegrid_policy_halves_the_spacing():
+    from manifolds.lddmm import grid_control_points
+
+    space = small_space(control_points="finegrid", sigma=0.3)
+    rng = np.random.default_rng(5)
+    t = space.random_point(rng)
+    cp = space.control_points(t)
+    np.testing.assert_array_equal(cp, grid_control_points(t, 0.15))
+    coarse = small_space(control_points="grid", sigma=0.3).control_points(t)
+    assert len(cp) > 2 * len(coarse)
+    steps = np.diff(np.unique(np.round(cp[:, 0], 12)))
+    np.testing.assert_allclose(steps, 0.15)

@@ -56,13 +56,17 @@ class StudyConfig:
     sigma : float
         Kernel width, in the meshes' units (mm for the built-in cohort).
     control_points : str
-        ``"grid"`` (spacing ``sigma`` over the template's bounding box) or ``"dense"``.
+        ``"grid"`` (spacing ``sigma`` over the template's bounding box), ``"finegrid"``
+        (spacing ``sigma / 2``) or ``"dense"`` (the mesh vertices).
     integrator : str
         ``"euler"``, ``"rk2"`` or ``"rk4"``.
     n_steps : int
         Time steps of the shooting.
     max_iter : int
         L-BFGS-B iterations of each registration.
+    ftol : float
+        L-BFGS-B stopping test on the relative decrease of the objective
+        (:class:`manifolds.numerics.LBFGSOptions`).
     fanning_steps : int
         Steps of the fanning scheme.
     kernel_backend : str
@@ -85,6 +89,7 @@ class StudyConfig:
     integrator: str = "euler"
     n_steps: int = 10
     max_iter: int = 100
+    ftol: float = 1e-11
     fanning_steps: int = 10
     kernel_backend: str = "auto"
     deformation: str = "lddmm"
@@ -96,6 +101,8 @@ class StudyConfig:
         d["alpha2"] = [float(a) for a in self.alpha2]
         if d["deformation"] == "lddmm":  # the default: results hashed before it existed stay valid
             del d["deformation"]
+        if d["ftol"] == 1e-11:  # the optimiser's default, as before the option existed
+            del d["ftol"]
         return d
 
 
@@ -121,7 +128,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         control_points=config.control_points,
         integrator=config.integrator,
         n_steps=config.n_steps,
-        optimizer={"max_iter": config.max_iter},
+        optimizer={"max_iter": config.max_iter, "ftol": config.ftol},
         backend=config.kernel_backend,
         **extra,
     )

@@ -109,7 +109,10 @@ def add_study_parser(sub) -> None:
         "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
     )
     p.add_argument(
-        "--control-points", choices=("grid", "dense"), default="grid", help="control points"
+        "--control-points",
+        choices=("grid", "finegrid", "dense"),
+        default="grid",
+        help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices"
     )
     p.add_argument(
         "--optimize-control-points",
@@ -126,6 +129,12 @@ def add_study_parser(sub) -> None:
     p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
     p.add_argument(
         "--max-iter", type=positive_int, default=100, help="L-BFGS-B iterations per registration"
+    )
+    p.add_argument(
+        "--ftol",
+        type=positive_float,
+        default=1e-11,
+        help="L-BFGS-B tolerance on the relative decrease of the objective",
     )
     p.add_argument(
         "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
@@ -273,6 +282,7 @@ def run_study_command(args) -> int:
         integrator=args.integrator,
         n_steps=args.n_steps,
         max_iter=args.max_iter,
+        ftol=args.ftol,
         fanning_steps=args.fanning_steps,
         kernel_backend=args.kernel_backend,
         deformation=args.deformation,
