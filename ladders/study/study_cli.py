@@ -112,7 +112,7 @@ def add_study_parser(sub) -> None:
         "--control-points",
         choices=("grid", "finegrid", "dense"),
         default="grid",
-        help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices"
+        help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices",
     )
     p.add_argument(
         "--optimize-control-points",
