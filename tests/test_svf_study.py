@@ -50,3 +50,61 @@ def test_cli_deformation_flag(tmp_path):
     assert main(argv) == 0
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["config"]["deformation"] == "svf"
+
+
+def _fake_results(values: dict[str, float], inverse: float) -> list[dict]:
+    """Per-subject results whose every error equals ``values[subject]``."""
+    out = []
+    for name, v in values.items():
+        variant = {e: v for e in (*ERROR_NAMES, "ase")}
+        pair = {
+            "residual": dict(variant),
+            "no_residual": dict(variant),
+            "registration_error": v,
+            "rkhs_norm": 2 * v,
+            "inverse_consistency": inverse,
+        }
+        out.append({"subject": name, "alpha2": {"1.0": pair}})
+    return out
+
+
+def test_comparison_pairs_subjects_by_name_with_known_answers():
+    from ladders.study.deformation_comparison import (
+        compare_deformations,
+        comparison_csv,
+        comparison_markdown,
+    )
+
+    lddmm = _fake_results({f"s{i}": 10.0 + i for i in range(6)}, inverse=1.0)
+    # SVF lower by i + 1 on subject i; subjects listed in another order; one missing.
+    svf = _fake_results({f"s{i}": 10.0 + i - (i + 1) for i in (5, 3, 1, 0, 2)}, inverse=1.0)
+    rows = compare_deformations(lddmm, svf, seed=0, n_boot=500)
+    row = next(r for r in rows if r["variant"] == "residual" and r["measure"] == "involutivity")
+    assert row["n"] == 5 and row["fraction_svf_lower"] == 1.0
+    assert row["median_difference"] == -3.0  # differences -1, -2, -3, -4, -6
+    assert row["mean_lddmm"] == pytest.approx(np.mean([10, 11, 12, 13, 15]))
+    assert row["wilcoxon_p"] == pytest.approx(0.0625)  # exact two-sided, n = 5, all negative
+    inverse = next(r for r in rows if r["measure"] == "inverse_consistency")
+    assert inverse["variant"] == "registration" and inverse["median_difference"] == 0.0
+    assert inverse["wilcoxon_p"] == 1.0
+    text = comparison_markdown(rows)
+    assert "5 subjects" in text and "| 1 | residual | involutivity |" in text
+    assert comparison_csv(rows).splitlines()[0].startswith("alpha2,variant,measure,n,")
+
+
+def test_cli_runs_both_deformations_and_compares_them(tmp_path, capsys):
+    argv = ["study", "--subjects", "2", "--vertices", "30", "--alpha2", "1", "--max-iter", "20"]
+    argv += ["--deformation", "both", "-o", str(tmp_path), "--jobs", "1", "--no-progress"]
+    argv += ["--no-meshes", "--n-steps", "4", "--fanning-steps", "2"]
+    assert main(argv) == 0
+    for model in ("lddmm", "svf"):
+        assert (tmp_path / model / "summary.md").exists()
+        assert (tmp_path / model / "results.csv").exists()
+    text = (tmp_path / "comparison.md").read_text()
+    assert "LDDMM against SVF, 2 subjects" in text
+    rows = (tmp_path / "comparison.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 5 + 3  # one alpha^2: 2 variants x 5 measures + 3 shared
+    assert main([*argv, "--optimize-control-points"]) == 2
+    assert (
+        "--optimize-control-points works with --deformation lddmm only" in capsys.readouterr().err
+    )

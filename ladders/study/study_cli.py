@@ -141,9 +141,10 @@ def add_study_parser(sub) -> None:
     )
     p.add_argument(
         "--deformation",
-        choices=("lddmm", "svf"),
+        choices=("lddmm", "svf", "both"),
         default="lddmm",
-        help="deformation model: LDDMM geodesics or stationary velocity fields (docs/svf.md)",
+        help="deformation model: LDDMM geodesics, stationary velocity fields (docs/svf.md), or "
+        "both (run into OUTPUT/lddmm and OUTPUT/svf, compared in OUTPUT/comparison.md)",
     )
     p.add_argument(
         "--kernel-backend",
@@ -265,17 +266,11 @@ def _input_files(args) -> list | None:
     return sorted({Path(f).resolve() for f in files}) or None
 
 
-def run_study_command(args) -> int:
-    """Run the study from parsed command-line arguments."""
+def _config(args, deformation: str):
     from .pipeline import StudyConfig
-    from .report import summarize, summary_markdown, write_report
-    from .runner import run_study
 
-    start = time.perf_counter()
-    cohort, description = _load_cohort(args)
-    check_grid_sigma(cohort.atlas, args.sigma, args.control_points)
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
-    config = StudyConfig(
+    return StudyConfig(
         alpha2=tuple(alpha2),
         sigma=args.sigma,
         control_points=args.control_points,
@@ -285,13 +280,21 @@ def run_study_command(args) -> int:
         ftol=args.ftol,
         fanning_steps=args.fanning_steps,
         kernel_backend=args.kernel_backend,
-        deformation=args.deformation,
+        deformation=deformation,
         distance=args.distance,
         optimize_control_points=args.optimize_control_points,
     )
+
+
+def _run_one(args, cohort, description, config, output: Path):
+    """Run (or resume) one study into ``output``, write its report, print its summary."""
+    from .report import summarize, summary_markdown, write_report
+    from .runner import run_study
+
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "
-        f"alpha^2 = {', '.join(f'{a:g}' for a in alpha2)}, output {args.output}"
+        f"{config.deformation}, alpha^2 = {', '.join(f'{a:g}' for a in config.alpha2)}, "
+        f"output {output}"
     )
     with _backend(args):
         outcome = run_study(
@@ -299,7 +302,7 @@ def run_study_command(args) -> int:
             cohort.atlas,
             cohort.faces,
             cohort.subjects,
-            args.output,
+            output,
             jobs=args.jobs,
             progress=not args.no_progress,
             data_description=description,
@@ -310,9 +313,7 @@ def run_study_command(args) -> int:
         print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
         if not args.no_meshes:
             _note_pairs_without_meshes(outcome)
-    paths = write_report(
-        outcome.results, args.output, cohort.atlas, cohort.faces, cohort.subjects[0].ed
-    )
+    paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, cohort.subjects[0].ed)
     n_regs = sum(a["n_registrations"] for r in outcome.results for a in r["alpha2"].values())
     n_bad = sum(r["non_converged_registrations"] for r in outcome.results)
     print()
@@ -322,12 +323,51 @@ def run_study_command(args) -> int:
         f"{config.max_iter}) before meeting the optimiser's tolerance."
     )
     print("Files:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
+    return outcome
+
+
+def _write_comparison(outcomes: dict, output: Path) -> Path:
+    from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
+    from .store import atomic_write_text
+
+    rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
+    unit = next((p["unit"] for r in outcomes["lddmm"].results for p in r["alpha2"].values()), "mm")
+    text = comparison_markdown(rows, unit)
+    atomic_write_text(output / "comparison.csv", comparison_csv(rows))
+    atomic_write_text(output / "comparison.md", text)
+    print(text)
+    return output / "comparison.md"
+
+
+def run_study_command(args) -> int:
+    """Run the study from parsed command-line arguments.
+
+    With ``--deformation both`` the LDDMM and the SVF studies run into
+    ``OUTPUT/lddmm`` and ``OUTPUT/svf`` and ``OUTPUT/comparison.md`` (and
+    ``.csv``) compares them subject by subject.
+    """
+    start = time.perf_counter()
+    cohort, description = _load_cohort(args)
+    check_grid_sigma(cohort.atlas, args.sigma, args.control_points)
+    output = Path(args.output)
+    models = ("lddmm", "svf") if args.deformation == "both" else (args.deformation,)
+    if args.optimize_control_points and "svf" in models:
+        raise UsageError(
+            "symladders study: --optimize-control-points works with --deformation lddmm only"
+        )
+    outcomes = {}
+    for model in models:
+        folder = output / model if len(models) > 1 else output
+        outcomes[model] = _run_one(args, cohort, description, _config(args, model), folder)
+    if len(models) > 1:
+        print("Comparison:", _write_comparison(outcomes, output))
     print(f"Total wall time {time.perf_counter() - start:.1f} s")
-    if outcome.failures:
+    failed = [(m, o) for m, o in outcomes.items() if o.failures]
+    for model, o in failed:
         print(
-            f"symladders study: {outcome.n_failed_subjects} subject(s) failed "
-            f"({len(outcome.failures)} pair(s)); errors in summary.md and the result files",
+            f"symladders study: {o.n_failed_subjects} subject(s) failed "
+            f"({len(o.failures)} pair(s)){f' ({model})' if len(models) > 1 else ''}; "
+            "errors in summary.md and the result files",
             file=sys.stderr,
         )
-        return 1
-    return 0
+    return 1 if failed else 0
