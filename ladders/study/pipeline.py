@@ -168,6 +168,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject, shapes=None) 
     out["las"] = {key: np.asarray(v).tolist() for key, v in las.items()}
     out["n_registrations"] = int(space.n_registrations)
     out["non_converged_registrations"] = int(space.n_unconverged)
+    out["n_iterations"] = int(space.n_iterations)
     out["unit"] = UNITS[config.distance]
     return out
 

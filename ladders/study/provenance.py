@@ -75,6 +75,7 @@ def _counts(outcome) -> dict:
         "pair_time_total_s": float(sum(d["seconds"] for d in pairs)),
         "registrations": int(sum(d["n_registrations"] for d in pairs)),
         "non_converged_registrations": int(sum(d["non_converged_registrations"] for d in pairs)),
+        "optimiser_iterations": int(sum(d.get("n_iterations", 0) for d in pairs)),
     }
 
 

@@ -78,6 +78,8 @@ class KernelLandmarkSpace(Connection):
         Registrations computed (cache hits excluded).
     n_unconverged : int
         Among them, those that stopped before meeting the optimiser's tolerance.
+    n_iterations : int
+        Optimiser iterations of those registrations.
     """
 
     is_symmetric = False
@@ -124,6 +126,7 @@ class KernelLandmarkSpace(Connection):
         self._cache: OrderedDict = OrderedDict()
         self.n_registrations = 0
         self.n_unconverged = 0
+        self.n_iterations = 0
 
     def _check_policy(self, control_points, dim: int):
         if isinstance(control_points, str):
@@ -262,6 +265,7 @@ class KernelLandmarkSpace(Connection):
         result = self._register(template, target, cp, initial_momenta)
         self.n_registrations += 1
         self.n_unconverged += not result.converged
+        self.n_iterations += result.n_iter
         for arr in (result.momenta, result.residual, result.deformed, result.control_points):
             arr.setflags(write=False)
         if self.cache_size > 0:
