@@ -88,7 +88,7 @@ class StudyConfig:
     control_points: str = "grid"
     integrator: str = "euler"
     n_steps: int = 10
-    max_iter: int = 100
+    max_iter: int = 2000
     ftol: float = 1e-11
     fanning_steps: int = 10
     kernel_backend: str = "auto"

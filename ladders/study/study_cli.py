@@ -28,7 +28,7 @@ __all__ = ["add_study_parser", "run_study_command", "DEFAULT_ALPHA2", "FULL_ALPH
 
 FULL_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
 DEFAULT_ALPHA2 = FULL_ALPHA2
-DEFAULT_SUBJECTS = 40
+DEFAULT_SUBJECTS = 20
 FULL_SUBJECTS = 138
 
 
@@ -102,7 +102,7 @@ def add_study_parser(sub) -> None:
         "--alpha2", type=_floats, default=None, help="comma-separated alpha^2 values (eq. 3)"
     )
     p.add_argument(
-        "--vertices", type=positive_int, default=241, help="vertices of the built-in meshes"
+        "--vertices", type=positive_int, default=1000, help="vertices of the built-in meshes"
     )
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
     p.add_argument(
@@ -128,7 +128,7 @@ def add_study_parser(sub) -> None:
     p.add_argument("--integrator", choices=("euler", "rk2", "rk4"), default="euler")
     p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
     p.add_argument(
-        "--max-iter", type=positive_int, default=100, help="L-BFGS-B iterations per registration"
+        "--max-iter", type=positive_int, default=2000, help="L-BFGS-B iterations per registration"
     )
     p.add_argument(
         "--ftol",
