@@ -87,7 +87,7 @@ def plot_errors(results: list[dict], path: Path, unit: str) -> None:
             levels = [np.median(collect(results, k, (ref,))) for k in keys]
             ax.plot(centres, np.maximum(levels, 1e-16), style, marker=marker, ms=5, label=label)
         ax.set_title(LABELS[name], fontsize=12)
-        ax.set_ylabel(f"error ({unit})")
+        ax.set_ylabel(f"error, {unit}")
     handles = [plt.Rectangle((0, 0), 1, 1, color=_COLORS[v], alpha=0.7) for v in VARIANTS]
     handles += axes[0, 0].get_lines()[-2:]
     labels = ["with residuals", "without residuals", *(r[0] for r in refs.values())]
