@@ -58,6 +58,14 @@ def add_study_parser(sub) -> None:
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
+    _add_input_arguments(p)
+    _add_model_arguments(p)
+    _add_run_arguments(p)
+    p.set_defaults(run=run_study_command)
+
+
+def _add_input_arguments(p) -> None:
+    """Flags choosing the cohort and the output folder."""
     p.add_argument(
         "--output",
         "-o",
@@ -105,6 +113,10 @@ def add_study_parser(sub) -> None:
         "--vertices", type=positive_int, default=1000, help="vertices of the built-in meshes"
     )
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
+
+
+def _add_model_arguments(p) -> None:
+    """Flags of the deformation model, the registration and the transports."""
     p.add_argument(
         "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
     )
@@ -152,6 +164,10 @@ def add_study_parser(sub) -> None:
         default="auto",
         help="kernel sums: 'auto' uses numba when it imports, else numpy (the reference)",
     )
+
+
+def _add_run_arguments(p) -> None:
+    """Flags of the execution: kernels, parallelism, progress, mesh outputs."""
     p.add_argument(
         "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
     )
@@ -173,7 +189,6 @@ def add_study_parser(sub) -> None:
         action="store_true",
         help="do not write the .vtu meshes (M, s_M(S'), T' and strain maps) under OUTPUT/meshes",
     )
-    p.set_defaults(run=run_study_command)
 
 
 def _load_cohort(args):
