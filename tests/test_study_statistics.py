@@ -106,3 +106,17 @@ def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
     lines = paired_csv(rows).splitlines()
     assert lines[0].startswith("alpha2,measure,n,fraction_residual_lower,median_difference")
     assert len(lines) == 11
+
+
+def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
+    from ladders.study.report import convergence_markdown
+
+    pair = {"n_registrations": 13, "non_converged_registrations": 1, "n_iterations": 260}
+    results = [
+        {"alpha2": {"1.0": {**pair, "max_gradient_norm": 2e-8}}},
+        {"alpha2": {"1.0": {**pair, "max_gradient_norm": 5e-7}, "10.0": {**pair}}},
+    ]
+    text = convergence_markdown(results)
+    assert "Registrations: 39; 36 (92.31%) met the optimiser's tolerance" in text
+    assert "3 stopped at the iteration limit; 20 iterations on average" in text
+    assert "largest final gradient 5e-07" in text

@@ -169,6 +169,7 @@ def _one_alpha(config, atlas, faces, subject, alpha2, las_subject, shapes=None) 
     out["n_registrations"] = int(space.n_registrations)
     out["non_converged_registrations"] = int(space.n_unconverged)
     out["n_iterations"] = int(space.n_iterations)
+    out["max_gradient_norm"] = float(space.max_gradient_norm)
     out["unit"] = UNITS[config.distance]
     return out
 

@@ -64,6 +64,24 @@ def _cell(get: dict, key: tuple) -> str:
     return f"{get[key]:.3g}" if key in get else "n/a"
 
 
+def convergence_markdown(results: list[dict]) -> str:
+    """One paragraph: registrations, the fraction that met the optimiser's tolerance,
+    mean iterations and the largest final gradient (in the optimiser's variables)."""
+    pairs = [p for r in results for p in r["alpha2"].values()]
+    n = sum(p["n_registrations"] for p in pairs)
+    bad = sum(p["non_converged_registrations"] for p in pairs)
+    iters = sum(p.get("n_iterations", 0) for p in pairs)
+    grads = [p["max_gradient_norm"] for p in pairs if "max_gradient_norm" in p]
+    grad = max(grads, default=float("nan"))
+    if n == 0:
+        return "No registration.\n"
+    return (
+        f"Registrations: {n}; {n - bad} ({(n - bad) / n:.2%}) met the optimiser's tolerance, "
+        f"{bad} stopped at the iteration limit; {iters / n:.0f} iterations on average; "
+        f"largest final gradient {grad:.3g} (optimiser's normalised variables).\n"
+    )
+
+
 def summary_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
     """A Table-1-style Markdown table: mean errors per ``alpha^2``, residual vs no residual."""
     alphas = sorted({r["alpha2"] for r in rows})
@@ -168,7 +186,8 @@ def write_report(
     tidy = tidy_rows(results, unit)
     unit = unit or next(row["unit"] for row in tidy if row["measure"] == "centrality")
     rows, paired = summarize(results), paired_statistics(results, seed=0)
-    text = summary_markdown(rows, unit) + "\n" + paired_markdown(paired, unit)
+    text = summary_markdown(rows, unit) + "\n" + convergence_markdown(results) + "\n"
+    text += paired_markdown(paired, unit)
     if failures_markdown(results):
         text += "\n" + failures_markdown(results)
     atomic_write_text(paths["summary_csv"], summary_csv(rows))

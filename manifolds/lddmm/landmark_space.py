@@ -80,6 +80,8 @@ class KernelLandmarkSpace(Connection):
         Among them, those that stopped before meeting the optimiser's tolerance.
     n_iterations : int
         Optimiser iterations of those registrations.
+    max_gradient_norm : float
+        Largest final gradient (:attr:`RegistrationResult.gradient_norm`) among them.
     """
 
     is_symmetric = False
@@ -127,6 +129,7 @@ class KernelLandmarkSpace(Connection):
         self.n_registrations = 0
         self.n_unconverged = 0
         self.n_iterations = 0
+        self.max_gradient_norm = 0.0
 
     def _check_policy(self, control_points, dim: int):
         if isinstance(control_points, str):
@@ -266,6 +269,7 @@ class KernelLandmarkSpace(Connection):
         self.n_registrations += 1
         self.n_unconverged += not result.converged
         self.n_iterations += result.n_iter
+        self.max_gradient_norm = max(self.max_gradient_norm, result.gradient_norm)
         for arr in (result.momenta, result.residual, result.deformed, result.control_points):
             arr.setflags(write=False)
         if self.cache_size > 0:

@@ -64,6 +64,9 @@ class RegistrationResult:
         Objective at the initial momenta and after every iteration.
     converged : bool
     message : str
+    gradient_norm : float
+        Largest entry of the final gradient in the optimiser's (preconditioned,
+        normalised) variables, the quantity L-BFGS-B compares with ``gtol``.
     """
 
     momenta: np.ndarray
@@ -79,6 +82,7 @@ class RegistrationResult:
     history: list = field(default_factory=list)
     converged: bool = False
     message: str = ""
+    gradient_norm: float = float("nan")
 
 
 def is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
@@ -313,4 +317,5 @@ def make_result(target, control_points, momenta, evaluation, opt, scale) -> Regi
         history=[h * scale for h in opt.history],
         converged=opt.converged,
         message=opt.message,
+        gradient_norm=float(np.max(np.abs(opt.grad))) if np.size(opt.grad) else 0.0,
     )
