@@ -35,6 +35,7 @@ SETTINGS = {
     "grid-1009": (1000, 20.0, "grid", False, 1000, 1e-11),
     "grid-sigma10-1009": (1000, 10.0, "grid", False, 1000, 1e-11),
     "finegrid-1009": (1000, 20.0, "finegrid", False, 1000, 1e-11),
+    "optimised-grid-241": (241, 20.0, "grid", True, 1000, 1e-8),
     "optimised-grid-1009": (1000, 20.0, "grid", True, 1000, 1e-8),
 }
 
