@@ -52,7 +52,8 @@ class KernelLandmarkSpace(Connection):
         Regularisation of the registration: ``C = ||S - phi(T)||^2 + alpha^2 ||v||_H^2``.
     control_points : {"auto", "dense", "grid"} or array of shape ``(n_cp, d)``, default "auto"
         Control-point policy (see :mod:`manifolds.lddmm.control_points`).
-    integrator : {"euler", "rk2", "rk4"} or Integrator
+    integrator : {"euler", "rk2", "rk4"} or Integrator, optional
+        Defaults to the class's ``default_integrator``.
     n_steps : int, default 10
     optimizer : LBFGSOptions or dict, optional
         Settings of the registration's L-BFGS-B.
@@ -88,6 +89,8 @@ class KernelLandmarkSpace(Connection):
     supports_batch = False
     #: Whether ``log`` optimises the control points too (then tangents are LandmarkTangent).
     optimize_control_points = False
+    #: Integrator used when none is given.
+    default_integrator = "euler"
 
     def __init__(
         self,
@@ -96,7 +99,7 @@ class KernelLandmarkSpace(Connection):
         sigma: float,
         alpha: float,
         control_points="auto",
-        integrator: str | Integrator = "euler",
+        integrator: str | Integrator | None = None,
         n_steps: int = 10,
         optimizer: LBFGSOptions | dict | None = None,
         cache_size: int = 16,
@@ -120,7 +123,9 @@ class KernelLandmarkSpace(Connection):
             max_control_points, f"{name}: max_control_points", minimum=1
         )
         self.control_points_policy = self._check_policy(control_points, int(dim))
-        self.integrator = get_integrator(integrator)
+        self.integrator = get_integrator(
+            self.default_integrator if integrator is None else integrator
+        )
         self.optimizer = LBFGSOptions.coerce(optimizer, f"{name}: optimizer")
         self.cache_size = check_int(cache_size, f"{name}: cache_size", minimum=0)
         self.auto_threshold = check_int(auto_threshold, f"{name}: auto_threshold", minimum=0)

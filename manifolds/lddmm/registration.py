@@ -201,6 +201,52 @@ def register(
         The optimiser's variable for the control points is ``c / scale``
         (default ``kernel.sigma``), next to the preconditioned ``z`` of the momenta.
     """
+    return run_registration(
+        registration_objective,
+        "LDDMM",
+        template,
+        target,
+        kernel,
+        alpha,
+        control_points,
+        integrator,
+        n_steps,
+        initial_momenta,
+        options,
+        precondition,
+        rel_ridge,
+        warn,
+        optimize_control_points,
+        control_point_scale,
+    )
+
+
+def run_registration(
+    objective,
+    label: str,
+    template,
+    target,
+    kernel: GaussianKernel,
+    alpha: float,
+    control_points=None,
+    integrator: str | Integrator = "euler",
+    n_steps: int = 10,
+    initial_momenta=None,
+    options: LBFGSOptions | None = None,
+    precondition: bool = True,
+    rel_ridge: float = 1e-2,
+    warn: bool = True,
+    optimize_control_points: bool = False,
+    control_point_scale: float | None = None,
+) -> RegistrationResult:
+    """The L-BFGS-B driver shared by the LDDMM and SVF registrations.
+
+    ``objective(kernel, template, target, control_points, momenta, alpha,
+    integrator, n_steps, control_points_gradient=...)`` returns ``(value,
+    gradient, deformed, norm_sq)`` as :func:`registration_objective` does; ``label``
+    names the model in the convergence warning. The other parameters are those of
+    :func:`register`.
+    """
     template = np.asarray(template, dtype=float)
     target = np.asarray(target, dtype=float)
     cp = template if control_points is None else np.asarray(control_points, dtype=float)
@@ -212,13 +258,11 @@ def register(
         mu0 = np.asarray(initial_momenta, dtype=float).reshape(n_cp, dim)
     else:
         mu0 = pre.linearised_start(kernel, template, target, cp)
-
     c_scale = kernel.sigma if control_point_scale is None else float(control_point_scale)
     if not (np.isfinite(c_scale) and c_scale > 0):
         raise ValueError(f"control_point_scale: expected a positive number, got {c_scale!r}")
-    problem = _Problem(
-        kernel, template, target, alpha, integrator, n_steps, pre, optimize_control_points, c_scale
-    )
+    problem = _Problem(objective, kernel, template, target, alpha, integrator, n_steps, pre)
+    problem.optimise, problem.c_scale = optimize_control_points, c_scale
     x0 = problem.variables(mu0, cp)
     f_init = problem.evaluate(x0)[0]
     problem.scale = f_init if f_init > 0 else 1.0
@@ -228,11 +272,11 @@ def register(
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
-                f"LDDMM registration did not converge after {opt.n_iter} iterations "
+                f"{label} registration did not converge after {opt.n_iter} iterations "
                 f"({opt.message}); objective {result.objective:.6g}, "
                 f"RMS residual {result.rms_error:.3g}"
             ),
-            stacklevel=2,
+            stacklevel=3,
         )
     return result
 
@@ -245,12 +289,11 @@ class _Problem:
     (which sets ``scale``) and the final iterate are not shot twice.
     """
 
-    def __init__(
-        self, kernel, template, target, alpha, integrator, n_steps, pre, optimise, c_scale
-    ):
+    def __init__(self, objective, kernel, template, target, alpha, integrator, n_steps, pre):
+        self.objective = objective
         self.kernel, self.template, self.target = kernel, template, target
         self.alpha, self.integrator, self.n_steps = alpha, integrator, n_steps
-        self.pre, self.optimise, self.c_scale = pre, optimise, c_scale
+        self.pre, self.optimise, self.c_scale = pre, False, 1.0
         self.scale = 1.0
         self.control_points = None
         self._last: dict = {}
@@ -274,7 +317,7 @@ class _Problem:
         key = x.tobytes()
         if self._last.get("key") != key:
             mu, c = self.unpack(x)
-            out = registration_objective(
+            out = self.objective(
                 self.kernel,
                 self.template,
                 self.target,

@@ -17,16 +17,12 @@ same linearisation ``exp(v)(T) ~ T + K_xc m``.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
-from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
-from ..numerics.optimizers import LBFGSOptions, minimize_lbfgsb
+from ..numerics.optimizers import LBFGSOptions
 from .kernels import GaussianKernel
-from .preconditioner import make_preconditioner
-from .registration import RegistrationResult, is_dense, make_result
+from .registration import RegistrationResult, run_registration
 from .stationary_flow import kernel_flow, kernel_flow_vjp
 
 __all__ = ["svf_objective", "register_svf"]
@@ -98,45 +94,30 @@ def register_svf(
     :class:`~manifolds.ConvergenceWarning` when ``warn`` and the optimiser did
     not converge.
     """
-    template = np.asarray(template, dtype=float)
-    target = np.asarray(target, dtype=float)
-    cp = template if control_points is None else np.asarray(control_points, dtype=float)
-    n_cp, dim = cp.shape
-    alpha = float(alpha)
-    dense = is_dense(template, cp)
-    pre = make_preconditioner(kernel, template, cp, alpha, dense, precondition, rel_ridge)
-    if initial_momenta is not None:
-        m0 = np.asarray(initial_momenta, dtype=float).reshape(n_cp, dim)
-    else:
-        m0 = pre.linearised_start(kernel, template, target, cp)
-    last: dict = {}
+    return run_registration(
+        _svf_objective_for_driver,
+        "SVF",
+        template,
+        target,
+        kernel,
+        alpha,
+        control_points,
+        integrator,
+        n_steps,
+        initial_momenta,
+        options,
+        precondition,
+        rel_ridge,
+        warn,
+    )
 
-    def evaluate(z):
-        key = z.tobytes()
-        if last.get("key") != key:
-            m = pre.to_momenta(z.reshape(n_cp, dim))
-            out = svf_objective(kernel, template, target, cp, m, alpha, integrator, n_steps)
-            last.update(key=key, out=out)
-        return last["out"]
 
-    z0 = pre.to_variables(m0).ravel()
-    f_init = evaluate(z0)[0]
-    scale = f_init if f_init > 0 else 1.0
-
-    def fun_and_grad(z):
-        value, g_m, _, _ = evaluate(z)
-        return value / scale, pre.gradient_to_variables(g_m).ravel() / scale
-
-    opt = minimize_lbfgsb(fun_and_grad, z0, options)
-    momenta = pre.to_momenta(opt.x.reshape(n_cp, dim))
-    result = make_result(target, cp, momenta, evaluate(opt.x), opt, scale)
-    if warn and not result.converged:
-        warnings.warn(
-            ConvergenceWarning(
-                f"SVF registration did not converge after {opt.n_iter} iterations "
-                f"({opt.message}); objective {result.objective:.6g}, "
-                f"RMS residual {result.rms_error:.3g}"
-            ),
-            stacklevel=2,
-        )
-    return result
+def _svf_objective_for_driver(
+    kernel, template, target, control_points, momenta, alpha, integrator, n_steps, **flags
+):
+    """:func:`svf_objective` with the driver's signature (the SVF keeps its control points)."""
+    if flags.get("control_points_gradient"):
+        raise ValueError("the SVF registration does not optimise its control points")
+    return svf_objective(
+        kernel, template, target, control_points, momenta, alpha, integrator, n_steps
+    )

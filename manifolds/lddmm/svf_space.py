@@ -19,10 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..numerics.integrators import Integrator
-from ..numerics.optimizers import LBFGSOptions
 from ..validation import check_array
-from .control_points import AUTO_THRESHOLD, MAX_CONTROL_POINTS
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult
 from .stationary_flow import StationaryFlow, kernel_flow
@@ -42,39 +39,7 @@ class SVFLandmarks(KernelLandmarkSpace):
     defaults to ``"rk4"``.
     """
 
-    def __init__(
-        self,
-        n_landmarks: int,
-        dim: int,
-        sigma: float,
-        alpha: float,
-        control_points="auto",
-        integrator: str | Integrator = "rk4",
-        n_steps: int = 10,
-        optimizer: LBFGSOptions | dict | None = None,
-        cache_size: int = 16,
-        backend: str = "auto",
-        block_size: int | None = None,
-        auto_threshold: int = AUTO_THRESHOLD,
-        precondition: bool = True,
-        max_control_points: int = MAX_CONTROL_POINTS,
-    ):
-        super().__init__(
-            n_landmarks,
-            dim,
-            sigma,
-            alpha,
-            control_points=control_points,
-            integrator=integrator,
-            n_steps=n_steps,
-            optimizer=optimizer,
-            cache_size=cache_size,
-            backend=backend,
-            block_size=block_size,
-            auto_threshold=auto_threshold,
-            precondition=precondition,
-            max_control_points=max_control_points,
-        )
+    default_integrator = "rk4"
 
     # ------------------------------------------------------------ deformation model
     def deformation(self, point, tangent) -> StationaryFlow:
