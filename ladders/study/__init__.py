@@ -20,6 +20,7 @@ from .benchmark_shapes import bent_ellipsoid
 from .cohort import Cohort, CohortError, MeshFolderError, Subject
 from .cohort_statistics import CohortStatistics, cohort_statistics
 from .cohort_table import read_cohort_table
+from .deformation_comparison import compare_deformations, comparison_markdown
 from .mesh_io import (
     MESH_EXTENSIONS,
     UnusedMeshFilesWarning,
@@ -43,6 +44,8 @@ __all__ = [
     "MeshFolderError",
     "Subject",
     "CohortStatistics",
+    "compare_deformations",
+    "comparison_markdown",
     "cohort_statistics",
     "SubjectParameters",
     "SyntheticLVModel",

@@ -1,5 +1,7 @@
 """The LDDMM landmark space and everything it is made of (paper, Section 2.1).
 
+- :mod:`.landmark_space`: :class:`KernelLandmarkSpace`, what the LDDMM and SVF spaces
+  share (control points, registration cache, log, metric, sampling);
 - :mod:`.space`: :class:`LDDMMLandmarks`, the connection (``exp`` = Hamiltonian
   shooting, ``log`` = registration, inverse consistency);
 - :mod:`.registration`: the registration objective (eq. 3), its exact gradient and
@@ -20,6 +22,7 @@
 
 from .control_points import POLICIES, grid_control_points, resolve_control_points
 from .kernels import GaussianKernel, numba_available
+from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
 from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
@@ -44,6 +47,7 @@ from .svf_space import SVFLandmarks
 from .tangent import LandmarkTangent
 
 __all__ = [
+    "KernelLandmarkSpace",
     "LDDMMLandmarks",
     "LandmarkTangent",
     "GaussianKernel",
