@@ -148,7 +148,7 @@ def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -
     m = space.midpoint(template, shape)
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)
-    ladder = space.transvection(template, m)(other)  # s_T o s_M (S'): the pole ladder
+    ladder = space.symmetry(template, s_m_other)  # the transvection s_T o s_M at S' (pole ladder)
     return SymmetryErrors(
         midpoint_distance=d(m, m_from_shape),
         centrality=d(space.symmetry(m, template), shape),

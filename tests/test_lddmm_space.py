@@ -143,3 +143,13 @@ def test_finegrid_policy_halves_the_spacing():
     assert len(cp) > 2 * len(coarse)
     steps = np.diff(np.unique(np.round(cp[:, 0], 12)))
     np.testing.assert_allclose(steps, 0.15)
+
+
+def test_study_preflight_budget_covers_the_finer_grid():
+    from ladders.study.cli_types import check_grid_sigma
+
+    shape = np.random.default_rng(0).uniform(0.0, 100.0, (50, 3))  # a 100 mm box
+    check_grid_sigma(shape, 5.0, "grid")  # 21^3 = 9,261 points: within the budget
+    with pytest.raises(ManifoldError, match="sigma"):
+        check_grid_sigma(shape, 5.0, "finegrid")  # spacing 2.5 mm: 41^3 = 68,921 points
+    check_grid_sigma(shape, 0.01, "dense")  # no grid, nothing to check

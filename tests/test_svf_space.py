@@ -155,3 +155,8 @@ def test_validation_errors_name_the_argument():
             SVFLandmarks(**params)
     with pytest.raises(ValueError, match="integrator"):
         SVFLandmarks(6, 2, sigma=1.0, alpha=0.1, integrator="rk3")
+
+
+def test_svf_space_refuses_to_optimise_its_control_points():
+    with pytest.raises(ManifoldError, match="optimize_control_points"):
+        SVFLandmarks(10, 3, sigma=0.5, alpha=0.1, optimize_control_points=True)

@@ -194,9 +194,10 @@ def check_grid_sigma(points, sigma: float, control_points: str) -> None:
     """Before a study starts: refuse a ``--sigma`` whose control-point grid exceeds the budget.
 
     Raises :class:`~manifolds.errors.ManifoldError` (naming sigma, the shape's
-    extent and the count) for ``control_points == "grid"``.
+    extent and the count) for the policies that build a grid (``"grid"``, ``"finegrid"``).
     """
-    from manifolds.lddmm.control_points import MAX_CONTROL_POINTS, check_grid_budget
+    from manifolds.lddmm.control_points import MAX_CONTROL_POINTS, check_grid_budget, grid_spacing
 
-    if control_points == "grid":
-        check_grid_budget(points, sigma, MAX_CONTROL_POINTS)
+    spacing = grid_spacing(control_points, sigma)
+    if spacing is not None:
+        check_grid_budget(points, spacing, MAX_CONTROL_POINTS)

@@ -113,13 +113,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         raise ValueError(
             f"StudyConfig.deformation: expected 'lddmm' or 'svf', got {config.deformation!r}"
         )
-    if config.optimize_control_points and config.deformation != "lddmm":
-        raise ValueError(
-            "StudyConfig.optimize_control_points: only the 'lddmm' deformation optimises "
-            f"its control points, got deformation={config.deformation!r}"
-        )
     k, d = template.shape
-    extra = {"optimize_control_points": True} if config.optimize_control_points else {}
     return spaces[config.deformation](
         n_landmarks=k,
         dim=d,
@@ -130,7 +124,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         n_steps=config.n_steps,
         optimizer={"max_iter": config.max_iter, "ftol": config.ftol},
         backend=config.kernel_backend,
-        **extra,
+        optimize_control_points=config.optimize_control_points,
     )
 
 

@@ -32,6 +32,7 @@ __all__ = [
     "grid_size",
     "check_grid_budget",
     "resolve_control_points",
+    "grid_spacing",
     "POLICIES",
     "MAX_CONTROL_POINTS",
 ]
@@ -107,6 +108,12 @@ def grid_control_points(
     return np.stack([m.ravel() for m in mesh], axis=1)
 
 
+def grid_spacing(policy, sigma: float) -> float | None:
+    """Spacing of the grid a policy builds (``sigma`` for ``"grid"``, ``sigma / 2`` for
+    ``"finegrid"``), or ``None`` for a policy that builds no grid."""
+    return {"grid": sigma, "finegrid": 0.5 * sigma}.get(policy) if isinstance(policy, str) else None
+
+
 def resolve_control_points(
     template: np.ndarray,
     policy,
@@ -136,10 +143,9 @@ def resolve_control_points(
             policy = "dense" if template.shape[0] <= auto_threshold else "grid"
         if policy == "dense":
             return template
-        if policy == "grid":
-            return grid_control_points(template, sigma, max_points)
-        if policy == "finegrid":
-            return grid_control_points(template, 0.5 * sigma, max_points)
+        spacing = grid_spacing(policy, sigma)
+        if spacing is not None:
+            return grid_control_points(template, spacing, max_points)
         raise ManifoldError(
             f"control_points: unknown policy {policy!r}; use one of {POLICIES} or an array"
         )

@@ -68,6 +68,12 @@ class KernelLandmarkSpace(Connection):
         Vertex count above which ``"auto"`` switches from dense to grid control points.
     precondition : bool, default True
         Preconditioned L-BFGS variables (see ``docs/lddmm.md``).
+    optimize_control_points : bool, default False
+        Register over the control points and the momenta (eq. 3), starting from
+        the policy's control points (spaces with ``can_optimize_control_points``).
+        ``log`` then returns a :class:`~manifolds.lddmm.LandmarkTangent` carrying
+        its control points; ``exp`` accepts those and plain momenta at the
+        policy's control points.
     max_control_points : int, default 20000
         Budget of a grid of control points: a ``sigma`` so small against the
         template's extent that the grid would exceed it raises an error before
@@ -87,8 +93,8 @@ class KernelLandmarkSpace(Connection):
 
     is_symmetric = False
     supports_batch = False
-    #: Whether ``log`` optimises the control points too (then tangents are LandmarkTangent).
-    optimize_control_points = False
+    #: Whether the deformation model can optimise its control points in ``log``.
+    can_optimize_control_points = False
     #: Integrator used when none is given.
     default_integrator = "euler"
 
@@ -107,9 +113,16 @@ class KernelLandmarkSpace(Connection):
         block_size: int | None = None,
         auto_threshold: int = AUTO_THRESHOLD,
         precondition: bool = True,
+        optimize_control_points: bool = False,
         max_control_points: int = MAX_CONTROL_POINTS,
     ):
         name = type(self).__name__
+        if optimize_control_points and not self.can_optimize_control_points:
+            raise ManifoldError(
+                f"{name}: optimize_control_points: this space keeps its control points fixed "
+                "(only LDDMMLandmarks optimises them)"
+            )
+        self.optimize_control_points = bool(optimize_control_points)
         n_landmarks = check_int(n_landmarks, f"{name}: n_landmarks", minimum=1)
         if isinstance(dim, bool) or dim not in (2, 3):
             raise ManifoldError(f"{name}: dim: expected 2 or 3, got {dim!r}")
@@ -167,6 +180,18 @@ class KernelLandmarkSpace(Connection):
     @abstractmethod
     def _register(self, template, target, control_points, initial_momenta) -> RegistrationResult:
         """Minimise eq. (3) from ``control_points`` (and ``initial_momenta`` if given)."""
+
+    def _flow_inputs(self, template, momenta, points, control_points):
+        """Checked ``(control points, momenta, points)`` of :meth:`flow`."""
+        template = self.check_point(template, "template")
+        cp = (
+            self.control_points(template)
+            if control_points is None
+            else check_array(control_points, (self.point_shape[1],), f"{self.name}: control_points")
+        )
+        momenta = self._check_momenta(cp, momenta, "momenta")
+        pts = check_array(points, (self.point_shape[1],), f"{self.name}: points")
+        return cp, momenta, pts
 
     # ------------------------------------------------------------ building blocks
     def control_points(self, point) -> np.ndarray:

@@ -14,9 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.integrators import Integrator
-from ..numerics.optimizers import LBFGSOptions
 from ..validation import check_array, check_finite_result
-from .control_points import AUTO_THRESHOLD, MAX_CONTROL_POINTS
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register
 from .shooting import shoot
@@ -29,56 +27,17 @@ class LDDMMLandmarks(KernelLandmarkSpace):
     """Landmark shapes ``(k, d)`` with the LDDMM exponential and registration as logarithm.
 
     ``Exp_T(mu) = phi_1(T)`` is Hamiltonian shooting from ``(c(T), mu)`` (eq. 2);
-    ``Log_T(S)`` is the registration of eq. (3). The parameters common to the
-    landmark spaces are those of :class:`~manifolds.lddmm.landmark_space.KernelLandmarkSpace`
-    (``n_landmarks, dim, sigma, alpha, control_points, integrator, n_steps,
-    optimizer, cache_size, backend, block_size, auto_threshold, precondition,
-    max_control_points``); the integrator defaults to ``"euler"``.
-
-    Parameters
-    ----------
-    optimize_control_points : bool, default False
-        Register over the control points and the momenta (eq. 3), starting from
-        the policy's control points. ``log`` then returns a
-        :class:`~manifolds.lddmm.LandmarkTangent` carrying its control points;
-        ``exp`` accepts those and plain momenta at the policy's control points.
+    ``Log_T(S)`` is the registration of eq. (3), over the momenta or, with
+    ``optimize_control_points``, over the control points and the momenta. The
+    parameters are those of
+    :class:`~manifolds.lddmm.landmark_space.KernelLandmarkSpace` (``n_landmarks,
+    dim, sigma, alpha, control_points, integrator, n_steps, optimizer,
+    cache_size, backend, block_size, auto_threshold, precondition,
+    optimize_control_points, max_control_points``); the integrator defaults to
+    ``"euler"``.
     """
 
-    def __init__(
-        self,
-        n_landmarks: int,
-        dim: int,
-        sigma: float,
-        alpha: float,
-        control_points="auto",
-        integrator: str | Integrator = "euler",
-        n_steps: int = 10,
-        optimizer: LBFGSOptions | dict | None = None,
-        cache_size: int = 16,
-        backend: str = "auto",
-        block_size: int | None = None,
-        auto_threshold: int = AUTO_THRESHOLD,
-        precondition: bool = True,
-        optimize_control_points: bool = False,
-        max_control_points: int = MAX_CONTROL_POINTS,
-    ):
-        super().__init__(
-            n_landmarks,
-            dim,
-            sigma,
-            alpha,
-            control_points=control_points,
-            integrator=integrator,
-            n_steps=n_steps,
-            optimizer=optimizer,
-            cache_size=cache_size,
-            backend=backend,
-            block_size=block_size,
-            auto_threshold=auto_threshold,
-            precondition=precondition,
-            max_control_points=max_control_points,
-        )
-        self.optimize_control_points = bool(optimize_control_points)
+    can_optimize_control_points = True
 
     # ------------------------------------------------------------ deformation model
     def shoot(
@@ -131,14 +90,7 @@ class LDDMMLandmarks(KernelLandmarkSpace):
 
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
         """``phi_1(points)`` for the deformation shot from the template's control points."""
-        template = self.check_point(template, "template")
-        cp = (
-            self.control_points(template)
-            if control_points is None
-            else check_array(control_points, (self.point_shape[1],), "control_points")
-        )
-        momenta = self._check_momenta(cp, momenta, "momenta")
-        pts = check_array(points, (self.point_shape[1],), f"{self.name}: points")
+        cp, momenta, pts = self._flow_inputs(template, momenta, points, control_points)
         res = shoot(self.kernel, cp, momenta, self.integrator, self.n_steps, points=pts)
         return res.points
 

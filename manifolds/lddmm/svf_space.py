@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import check_array
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult
 from .stationary_flow import StationaryFlow, kernel_flow
@@ -52,14 +51,7 @@ class SVFLandmarks(KernelLandmarkSpace):
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
         """``exp(v)(points)`` for the field of ``momenta`` at ``control_points``
         (default ``c(template)``), shape ``(n, d)``."""
-        template = self.check_point(template, "template")
-        cp = (
-            self.control_points(template)
-            if control_points is None
-            else check_array(control_points, (self.point_shape[1],), f"{self.name}: control_points")
-        )
-        momenta = self._check_momenta(cp, momenta, "momenta")
-        pts = check_array(points, (self.point_shape[1],), f"{self.name}: points")
+        cp, momenta, pts = self._flow_inputs(template, momenta, points, control_points)
         return kernel_flow(self.kernel, cp, momenta, pts, self.integrator, self.n_steps).points
 
     def exp(self, point, tangent):
