@@ -62,7 +62,7 @@ def main(argv=None) -> None:
     t, s, s2 = cohort.atlas, cohort.subjects[0].ed, cohort.subjects[0].es
     for a2 in (float(a) for a in args.alpha2.split(",")):
         for optimise in (False, True):
-            config = StudyConfig(max_iter=args.max_iter, optimize_control_points=optimise)
+            config = StudyConfig.build(max_iter=args.max_iter, optimize_control_points=optimise)
             space = make_space(config, t, a2)
             if args.ftol is not None:
                 space.optimizer = replace(space.optimizer, ftol=args.ftol)

@@ -34,7 +34,7 @@ def run_case(policy: str, backend: str, iterations: int) -> dict:
     template, target, _ = bent_ellipsoid(subdivisions=5)
     space = LDDMMLandmarks(
         len(template), 3, sigma=0.5, alpha=0.02, control_points=policy,
-        optimizer={"max_iter": iterations}, backend=backend,
+        max_iter=iterations, kernel_backend=backend,
     )  # fmt: skip
     base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     with warnings.catch_warnings():

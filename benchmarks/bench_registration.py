@@ -42,41 +42,41 @@ def problem(subdivisions: int, scale: float = 1.0):
 
 def run_case(name: str, backend: str, max_extra: int, repeats: int, scale: float = 1.0) -> dict:
     from manifolds.lddmm.control_points import resolve_control_points
-    from manifolds.lddmm.kernels import GaussianKernel
     from manifolds.lddmm.registration import register
-    from manifolds.numerics.optimizers import LBFGSOptions
+    from manifolds.lddmm.settings import RegistrationSettings
 
     case = CASES[name]
     template, target = problem(case["subdivisions"], scale)
     cp = resolve_control_points(template, case["policy"], 0.5)
-    kernel = GaussianKernel(0.5, backend=backend)
+    settings = RegistrationSettings(sigma=0.5, kernel_backend=backend, integrator="euler")
+    kernel = settings.make_kernel()
     # Load the compiled kernels (serial and parallel paths) so that JIT time is not counted.
     for n in (20, 300):
         sub = cp[:n] if len(cp) >= n else template[:n]
         register(
             template[:n],
             target[:n],
-            kernel,
             0.02,
-            sub,
-            options=LBFGSOptions(max_iter=2),
+            settings.replace(max_iter=2),
+            control_points=sub,
+            kernel=kernel,
             warn=False,
         )
     rss_base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    args = dict(kernel=kernel, alpha=0.02, control_points=cp, integrator="euler", n_steps=10)
+    args = dict(kernel=kernel, alpha=0.02, control_points=cp)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         times = []
         for _ in range(max(1, repeats)):
             t0 = time.perf_counter()
-            r100 = register(template, target, options=LBFGSOptions(max_iter=100), **args)
+            r100 = register(template, target, settings=settings.replace(max_iter=100), **args)
             times.append(time.perf_counter() - t0)
         rss_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         t1 = time.perf_counter()
         final = register(
             template,
             target,
-            options=LBFGSOptions(max_iter=max_extra),
+            settings=settings.replace(max_iter=max_extra),
             initial_momenta=r100.momenta,
             **args,
         )

@@ -45,7 +45,7 @@ def run_setting(name: str, n_subjects: int, output: Path, jobs: int) -> dict:
 
     vertices, sigma, policy, optimise, max_iter, ftol = SETTINGS[name]
     cohort = make_synthetic_cohort(n_subjects, n_vertices=vertices, seed=0)
-    config = StudyConfig(
+    config = StudyConfig.build(
         alpha2=ALPHA2,
         sigma=sigma,
         control_points=policy,

@@ -21,8 +21,7 @@ import time
 import warnings
 
 from ladders.study.benchmark_shapes import bent_ellipsoid
-from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks
-from manifolds.numerics.optimizers import LBFGSOptions
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks
 
 SIGMA, ALPHA, N_STEPS = 0.5, 0.02, 10
 METHODS = (
@@ -35,14 +34,17 @@ METHODS = (
 
 def run(cls, integrator, template, target, repeats, max_iter):
     """Best time of ``repeats`` registrations and the last result."""
-    opts = LBFGSOptions(max_iter=max_iter)
+    settings = RegistrationSettings(
+        sigma=SIGMA, control_points="grid", integrator=integrator, n_steps=N_STEPS,
+        max_iter=max_iter,
+    )  # fmt: skip
     k, d = template.shape
     # Load the compiled kernels first so that JIT time is not counted.
-    warm = cls(k, d, SIGMA, ALPHA, "grid", integrator, N_STEPS, optimizer={"max_iter": 2})
+    warm = cls(k, d, alpha=ALPHA, settings=settings.replace(max_iter=2))
     warm.register(template, target)
     times = []
     for _ in range(max(1, repeats)):
-        space = cls(k, d, SIGMA, ALPHA, "grid", integrator, N_STEPS, optimizer=opts, cache_size=2)
+        space = cls(k, d, alpha=ALPHA, settings=settings, cache_size=2)
         t0 = time.perf_counter()
         res = space.register(template, target)
         times.append(time.perf_counter() - t0)

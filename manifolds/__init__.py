@@ -12,6 +12,7 @@ residual-augmented space :class:`ResidualAugmented`. Numerical methods live in
 """
 
 from .connection import Connection
+from .data_terms import DataTerm, SquaredDistance
 from .errors import (
     ConvergenceError,
     ConvergenceWarning,
@@ -28,6 +29,7 @@ from .lddmm import (
     LandmarkTangent,
     LDDMMLandmarks,
     RegistrationResult,
+    RegistrationSettings,
     StationaryFlow,
     SVFLandmarks,
     register,
@@ -56,6 +58,9 @@ __all__ = [
     "LDDMMLandmarks",
     "LandmarkTangent",
     "RegistrationResult",
+    "RegistrationSettings",
+    "DataTerm",
+    "SquaredDistance",
     "register",
     "SVFLandmarks",
     "StationaryFlow",

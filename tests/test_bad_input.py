@@ -20,8 +20,8 @@ from manifolds import (
     SPDMatrices,
     WarpedSurface,
 )
+from manifolds.lddmm import RegistrationSettings
 from manifolds.lddmm.shapes import random_shape
-from manifolds.numerics.optimizers import LBFGSOptions
 
 NAN = np.nan
 RNG = np.random.default_rng(0)
@@ -291,14 +291,12 @@ def lddmm_cases():
         ("dim-4", lambda: lddmm(dim=4), ManifoldError, "dim"),
         ("n_steps-zero", lambda: lddmm(n_steps=0), ManifoldError, "n_steps"),
         ("n_steps-nan", lambda: lddmm(n_steps=NAN), ManifoldError, "n_steps"),
-        (
-            "optimizer-max_iter",
-            lambda: lddmm(optimizer={"max_iter": -5}),
-            ManifoldError,
-            "max_iter",
-        ),
-        ("optimizer-unknown", lambda: lddmm(optimizer={"bogus": 1}), ManifoldError, "optimizer"),
-        ("optimizer-type", lambda: lddmm(optimizer="fast"), TypeError, "optimizer"),
+        ("max_iter", lambda: lddmm(max_iter=-5), ManifoldError, "max_iter"),
+        ("setting-unknown", lambda: lddmm(bogus=1), ManifoldError, "bogus"),
+        ("settings-type", lambda: lddmm(settings="fast"), TypeError, "settings"),
+        ("solver-unknown", lambda: lddmm(solver="newton-raphson"), ManifoldError, "solver"),
+        ("stopping-unknown", lambda: lddmm(stopping="never"), ManifoldError, "stopping"),
+        ("shape_tol-negative", lambda: lddmm(shape_tol=-1.0), ManifoldError, "shape_tol"),
         (
             "control_points-policy",
             lambda: lddmm(control_points="bogus"),
@@ -312,7 +310,7 @@ def lddmm_cases():
             "control_points",
         ),
         ("integrator", lambda: lddmm(integrator="bogus"), ValueError, "integrator"),
-        ("backend", lambda: lddmm(backend="gpu"), ManifoldError, "backend"),
+        ("backend", lambda: lddmm(kernel_backend="gpu"), ManifoldError, "kernel_backend"),
         ("cache_size", lambda: lddmm(cache_size=-1), ManifoldError, "cache_size"),
         (
             "max_control_points",
@@ -341,28 +339,52 @@ def lddmm_cases():
             ManifoldError,
             "block_size",
         ),
-        ("lbfgs-max_iter", lambda: LBFGSOptions(max_iter=-5), ManifoldError, "max_iter"),
-        ("lbfgs-max_iter-zero", lambda: LBFGSOptions(max_iter=0), ManifoldError, "max_iter"),
-        ("lbfgs-max_iter-float", lambda: LBFGSOptions(max_iter=2.5), ManifoldError, "max_iter"),
-        ("lbfgs-ftol", lambda: LBFGSOptions(ftol=NAN), ManifoldError, "ftol"),
-        ("lbfgs-gtol", lambda: LBFGSOptions(gtol=-1.0), ManifoldError, "gtol"),
+        ("settings-max_iter", lambda: SETTINGS.replace(max_iter=-5), ManifoldError, "max_iter"),
+        ("settings-max_iter-zero", lambda: SETTINGS.replace(max_iter=0), ManifoldError, "max_iter"),
         (
-            "lbfgs-max_corrections",
-            lambda: LBFGSOptions(max_corrections=0),
+            "settings-max_iter-float",
+            lambda: SETTINGS.replace(max_iter=2.5),
+            ManifoldError,
+            "max_iter",
+        ),
+        ("settings-ftol", lambda: SETTINGS.replace(ftol=NAN), ManifoldError, "ftol"),
+        ("settings-gtol", lambda: SETTINGS.replace(gtol=-1.0), ManifoldError, "gtol"),
+        (
+            "settings-max_corrections",
+            lambda: SETTINGS.replace(max_corrections=0),
             ManifoldError,
             "max_corrections",
         ),
         (
-            "lbfgs-max_line_search",
-            lambda: LBFGSOptions(max_line_search=0),
+            "settings-max_line_search",
+            lambda: SETTINGS.replace(max_line_search=0),
             ManifoldError,
             "max_line_search",
         ),
-        ("lbfgs-blas_threads", lambda: LBFGSOptions(blas_threads=0), ManifoldError, "blas_threads"),
+        (
+            "settings-blas_threads",
+            lambda: SETTINGS.replace(blas_threads=0),
+            ManifoldError,
+            "blas_threads",
+        ),
+        (
+            "settings-optimize_control_points",
+            lambda: SETTINGS.replace(optimize_control_points="yes"),
+            ManifoldError,
+            "optimize_control_points",
+        ),
+        ("settings-sigma", lambda: RegistrationSettings(sigma=-2.0), ManifoldError, "sigma"),
+        (
+            "settings-from_dict",
+            lambda: RegistrationSettings.from_dict({"sigma": 1.0, "sgima": 2.0}),
+            ManifoldError,
+            "sgima",
+        ),
     ]
     return [pytest.param(f, exc, m, id=f"lddmm-{n}") for n, f, exc, m in rows]
 
 
+SETTINGS = RegistrationSettings(sigma=1.0)
 API_CASES = closed_form_cases() + ode_and_wrapper_cases() + lddmm_cases()
 
 

@@ -23,11 +23,11 @@ from manifolds.residual import ResidualTangent
 pytestmark = pytest.mark.filterwarnings("ignore::manifolds.errors.ConvergenceWarning")
 
 K, SIGMA, ALPHA = 24, 0.5, 0.3
-OPTIONS = {"max_iter": 150}
+OPTIONS = {"max_iter": 150}  # settings overrides of the spaces
 
 
 def _spaces(alpha=ALPHA):
-    kw = dict(sigma=SIGMA, alpha=alpha, control_points="grid", optimizer=OPTIONS)
+    kw = dict(sigma=SIGMA, alpha=alpha, control_points="grid", **OPTIONS)
     fixed = LDDMMLandmarks(K, 2, **kw)
     optimised = LDDMMLandmarks(K, 2, optimize_control_points=True, **kw)
     return fixed, optimised
@@ -157,7 +157,7 @@ def test_study_runs_with_optimised_control_points_and_reports_in_the_chosen_unit
     k = cohort.atlas.shape[0]
     out = {}
     for distance in ("rms", "frobenius"):
-        config = StudyConfig(alpha2=(1.0,), max_iter=20, distance=distance)
+        config = StudyConfig.build(alpha2=(1.0,), max_iter=20, distance=distance)
         out[distance] = run_subject(config, *args)["alpha2"]["1.0"]
     for name in ("registration_error", "inverse_consistency"):
         np.testing.assert_allclose(out["frobenius"][name], np.sqrt(k) * out["rms"][name], rtol=1e-9)
@@ -168,7 +168,7 @@ def test_study_runs_with_optimised_control_points_and_reports_in_the_chosen_unit
             np.sqrt(k) * out["rms"]["residual"][measure],
             rtol=1e-9,
         )
-    config = StudyConfig(alpha2=(1.0,), max_iter=20, optimize_control_points=True)
+    config = StudyConfig.build(alpha2=(1.0,), max_iter=20, optimize_control_points=True)
     optimised = run_subject(config, *args)["alpha2"]["1.0"]
     # On this subject optimising c lowers the registration error too (0.29 vs 0.35 mm).
     assert optimised["registration_error"] < out["rms"]["registration_error"]

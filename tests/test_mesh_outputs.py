@@ -12,7 +12,7 @@ from ladders.study.runner import run_study
 from ladders.study.synthetic_lv import make_synthetic_cohort
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
-CONFIG = StudyConfig(alpha2=(1.0,), sigma=20.0, max_iter=15, n_steps=5, fanning_steps=3)
+CONFIG = StudyConfig.build(alpha2=(1.0,), sigma=20.0, max_iter=15, n_steps=5, fanning_steps=3)
 METHODS = ("pole_ladder_residual", "pole_ladder_no_residual", "fanning")
 
 

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from manifolds.errors import ConvergenceWarning
-from manifolds.lddmm import LDDMMLandmarks, register
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, register
 from manifolds.lddmm.kernels import GaussianKernel
-from manifolds.numerics.optimizers import LBFGSOptions
 
 
 def exact_pair(space, seed, scale=0.25):
@@ -22,7 +21,9 @@ def exact_pair(space, seed, scale=0.25):
 
 @pytest.mark.parametrize("policy", ["dense", "grid"])
 def test_exact_shot_is_recovered_with_small_alpha(policy):
-    space = LDDMMLandmarks(30, 2, sigma=0.5, alpha=1e-3, control_points=policy, backend="numpy")
+    space = LDDMMLandmarks(
+        30, 2, sigma=0.5, alpha=1e-3, control_points=policy, kernel_backend="numpy"
+    )
     template, target, _ = exact_pair(space, seed=0)
     res = space.register(template, target)
     diameter = np.max(np.linalg.norm(target[:, None] - target[None], axis=-1))
@@ -56,14 +57,14 @@ def test_error_grows_and_norm_falls_with_alpha():
 def test_non_convergence_warns_and_warm_start_resumes():
     space = LDDMMLandmarks(20, 2, sigma=0.5, alpha=0.05, control_points="dense")
     template, target, _ = exact_pair(space, seed=2, scale=0.4)
-    kernel = space.kernel
+    settings = space.settings
     with pytest.warns(ConvergenceWarning, match="did not converge"):
-        early = register(template, target, kernel, 0.05, options=LBFGSOptions(max_iter=2))
+        early = register(template, target, 0.05, settings.replace(max_iter=2))
     assert not early.converged and early.n_iter == 2
-    full = register(template, target, kernel, 0.05)
+    full = register(template, target, 0.05, settings)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)
-        warm = register(template, target, kernel, 0.05, initial_momenta=full.momenta)
+        warm = register(template, target, 0.05, settings, initial_momenta=full.momenta)
     assert warm.converged
     np.testing.assert_allclose(warm.history[0], full.objective, rtol=1e-12)
     assert warm.objective <= full.objective * (1 + 1e-12)
@@ -81,10 +82,11 @@ def test_inverse_consistency_is_small_for_a_nearby_pair():
 
 def test_compiled_and_numpy_registrations_agree():
     template, target, _ = exact_pair(
-        LDDMMLandmarks(30, 3, sigma=0.5, alpha=0.05, backend="numpy"), seed=4
+        LDDMMLandmarks(30, 3, sigma=0.5, alpha=0.05, kernel_backend="numpy"), seed=4
     )
     results = [
-        register(template, target, GaussianKernel(0.5, backend=b), 0.05) for b in ("numpy", "numba")
+        register(template, target, 0.05, RegistrationSettings(sigma=0.5, kernel_backend=b))
+        for b in ("numpy", "numba")
     ]
     np.testing.assert_allclose(results[0].objective, results[1].objective, rtol=1e-6)
 
@@ -110,17 +112,10 @@ def bent_ellipsoid(subdivisions=2):
 
 def test_longer_lbfgs_memory_lowers_the_objective_within_a_fixed_budget():
     template, target = bent_ellipsoid()
-    kernel = GaussianKernel(0.5, backend="numpy")
+    settings = RegistrationSettings(sigma=0.5, kernel_backend="numpy", max_iter=60)
     values = [
-        register(
-            template,
-            target,
-            kernel,
-            0.02,
-            options=LBFGSOptions(max_iter=60, max_corrections=m),
-            warn=False,
-        ).objective
-        for m in (10, 30, LBFGSOptions().max_corrections)
+        register(template, target, 0.02, settings.replace(max_corrections=m), warn=False).objective
+        for m in (10, 30, settings.max_corrections)
     ]
     assert values[2] < values[1] < values[0]
 
@@ -171,7 +166,12 @@ def test_parallel_kernel_path_matches_numpy_and_registration_is_thread_independe
         for n_threads in sorted({1, numba.config.NUMBA_NUM_THREADS}):
             numba.set_num_threads(n_threads)
             res = register(
-                template, target, fast, 0.02, options=LBFGSOptions(max_iter=20), warn=False
+                template,
+                target,
+                0.02,
+                RegistrationSettings(sigma=0.8, max_iter=20),
+                kernel=fast,
+                warn=False,
             )
             outcomes.append(res.momenta)
     finally:
@@ -183,7 +183,7 @@ def test_parallel_kernel_path_matches_numpy_and_registration_is_thread_independe
 def test_blas_thread_limit_is_applied_and_restored():
     import threadpoolctl
 
-    from manifolds.numerics.optimizers import limit_blas_threads
+    from manifolds.numerics.solvers import limit_blas_threads
 
     def blas_threads():
         return [

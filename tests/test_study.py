@@ -19,7 +19,7 @@ from ladders.study.runner import run_study
 from ladders.study.synthetic_lv import make_synthetic_cohort
 
 ALPHA2 = (0.01, 1.0, 100.0)
-CONFIG = StudyConfig(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
+CONFIG = StudyConfig.build(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
 COHORT = make_synthetic_cohort(n_subjects=3, grid=(8, 5), seed=0)
 
 
@@ -135,11 +135,11 @@ def test_resume_after_partial_run_gives_identical_results(study, tmp_path):
 
 def test_changed_parameters_are_recomputed(tmp_path):
     cohort = COHORT.head(1)
-    cfg = StudyConfig(alpha2=(100.0,), sigma=20.0, max_iter=20, fanning_steps=3)
+    cfg = StudyConfig.build(alpha2=(100.0,), sigma=20.0, max_iter=20, fanning_steps=3)
     run_study(cfg, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
     again = run_study(cfg, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
     assert again.computed == [] and again.skipped == [(cohort.names[0], 100.0)]
-    other = StudyConfig(alpha2=(100.0,), sigma=25.0, max_iter=20, fanning_steps=3)
+    other = StudyConfig.build(alpha2=(100.0,), sigma=25.0, max_iter=20, fanning_steps=3)
     third = run_study(other, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False)
     assert third.computed == [(cohort.names[0], 100.0)]
 
@@ -224,7 +224,9 @@ def test_claim_a_holds_at_small_alpha_with_control_points_at_the_vertices(tmp_pa
     midpoint distance, centrality and involutivity at alpha^2 = 0.01 as well as at 1,
     for the mean over the subjects (the paper's claim; docs/study.md)."""
     cohort = make_synthetic_cohort(n_subjects=3, grid=(10, 6), seed=0)
-    config = StudyConfig(alpha2=(0.01, 1.0), control_points="dense", max_iter=2000, fanning_steps=3)
+    config = StudyConfig.build(
+        alpha2=(0.01, 1.0), control_points="dense", max_iter=2000, fanning_steps=3
+    )
     out = run_study(
         config, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False, meshes=False
     )

@@ -19,7 +19,7 @@ from ladders.study.store import PairStore, atomic_write_text, validate_subject_n
 from ladders.study.synthetic_lv import make_synthetic_cohort
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
-CFG = StudyConfig(alpha2=(100.0,), sigma=20.0, max_iter=15, fanning_steps=2)
+CFG = StudyConfig.build(alpha2=(100.0,), sigma=20.0, max_iter=15, fanning_steps=2)
 
 
 def _run(config, out, subjects=None, **kw):
@@ -49,7 +49,7 @@ def test_extending_the_sweep_computes_only_the_new_pairs(tmp_path, monkeypatch):
     first = _run(CFG, tmp_path)
     assert len(calls) == 2 and all(n > 0 for *_, n in calls)
     before = _files(tmp_path)
-    wider = StudyConfig(alpha2=(100.0, 1089.0), sigma=20.0, max_iter=15, fanning_steps=2)
+    wider = StudyConfig.build(alpha2=(100.0, 1089.0), sigma=20.0, max_iter=15, fanning_steps=2)
     second = _run(wider, tmp_path)
     assert sorted(second.computed) == [(n, 1089.0) for n in COHORT.names]
     assert sorted(second.skipped) == [(n, 100.0) for n in COHORT.names]
@@ -64,14 +64,14 @@ def test_extending_the_sweep_computes_only_the_new_pairs(tmp_path, monkeypatch):
 def test_another_configuration_never_touches_earlier_results(tmp_path):
     first = _run(CFG, tmp_path)
     before = _files(tmp_path)
-    other = StudyConfig(alpha2=(100.0,), sigma=25.0, max_iter=15, fanning_steps=2)
+    other = StudyConfig.build(alpha2=(100.0,), sigma=25.0, max_iter=15, fanning_steps=2)
     second = _run(other, tmp_path)
     assert second.config_id != first.config_id and len(second.computed) == 2
     after = _files(tmp_path)
     assert all(after[p] == data for p, data in before.items())
     assert len(after) == 4
     shared = json.loads((tmp_path / "results" / second.config_id / "config.json").read_text())
-    assert shared["config"]["sigma"] == 25.0
+    assert shared["config"]["registration"]["sigma"] == 25.0
     again = _run(CFG, tmp_path)  # the first configuration is still complete
     assert again.computed == [] and len(again.skipped) == 2
 
@@ -203,7 +203,7 @@ def test_manifest_records_provenance(tmp_path):
         assert versions[pkg], pkg
     assert "numba" in versions and "meshio" in versions
     assert manifest["python"].count(".") == 2
-    ran = GaussianKernel(CFG.sigma, backend="auto").backend
+    ran = GaussianKernel(CFG.registration.sigma, backend="auto").backend
     assert manifest["kernel_backend"] == [ran] and ran in ("numpy", "numba")
     assert manifest["kernel_backend_requested"] == "auto"
     assert manifest["command_line"] == sys.argv

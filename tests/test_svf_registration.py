@@ -8,13 +8,14 @@ from autograd import grad
 from manifolds.errors import ConvergenceWarning
 from manifolds.lddmm.control_points import grid_control_points
 from manifolds.lddmm.kernels import GaussianKernel, numba_available
+from manifolds.lddmm.settings import RegistrationSettings
 from manifolds.lddmm.stationary_flow import kernel_flow
 from manifolds.lddmm.svf_registration import register_svf, svf_objective
 from manifolds.numerics.integrators import RK2, RK4, Euler
-from manifolds.numerics.optimizers import LBFGSOptions
 from tests.test_svf_flow import ag_flow
 
 SIGMA = 0.6
+SETTINGS = RegistrationSettings(sigma=SIGMA)
 ALPHA = 0.3
 N_STEPS = 4
 
@@ -64,7 +65,7 @@ def test_registration_recovers_the_field(dense):
     cp = template if dense else grid_control_points(template, SIGMA)
     true = 0.2 * rng.standard_normal(cp.shape)
     target = kernel_flow(kernel, cp, true, template).points
-    res = register_svf(template, target, kernel, 1e-4, control_points=cp)
+    res = register_svf(template, target, 1e-4, SETTINGS, control_points=cp)
     assert res.converged and res.rms_error < 1e-4
     np.testing.assert_allclose(res.residual, target - res.deformed)
     assert res.history[-1] <= res.history[0]
@@ -73,19 +74,15 @@ def test_registration_recovers_the_field(dense):
 
 
 def test_regularisation_trades_matching_for_norm():
-    kernel = GaussianKernel(SIGMA)
     template, target, cp, _ = problem(2, 15, True, seed=7)
-    loose = register_svf(template, target, kernel, 1e-2, control_points=cp)
-    tight = register_svf(template, target, kernel, 1.0, control_points=cp)
+    loose = register_svf(template, target, 1e-2, SETTINGS, control_points=cp)
+    tight = register_svf(template, target, 1.0, SETTINGS, control_points=cp)
     assert tight.rkhs_norm < loose.rkhs_norm
     assert tight.registration_error > loose.registration_error
 
 
 def test_non_convergence_warns_and_flags():
-    kernel = GaussianKernel(SIGMA)
     template, target, cp, _ = problem(2, 15, True, seed=8)
     with pytest.warns(ConvergenceWarning, match="SVF registration did not converge"):
-        res = register_svf(
-            template, target, kernel, 1e-3, control_points=cp, options=LBFGSOptions(max_iter=1)
-        )
+        res = register_svf(template, target, 1e-3, SETTINGS.replace(max_iter=1), control_points=cp)
     assert not res.converged and res.n_iter == 1

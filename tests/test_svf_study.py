@@ -17,8 +17,10 @@ COHORT = make_synthetic_cohort(n_subjects=2, grid=(8, 5), seed=0)
 def test_svf_subject_has_the_lddmm_fields_and_finite_values():
     kw = dict(alpha2=(1.0,), sigma=20.0, max_iter=40, fanning_steps=3)
     subject = COHORT.subjects[0]
-    svf = run_subject(StudyConfig(deformation="svf", **kw), COHORT.atlas, COHORT.faces, subject)
-    lddmm = run_subject(StudyConfig(**kw), COHORT.atlas, COHORT.faces, subject)
+    svf = run_subject(
+        StudyConfig.build(deformation="svf", **kw), COHORT.atlas, COHORT.faces, subject
+    )
+    lddmm = run_subject(StudyConfig.build(**kw), COHORT.atlas, COHORT.faces, subject)
     a_svf, a_lddmm = svf["alpha2"]["1.0"], lddmm["alpha2"]["1.0"]
     assert set(a_svf) == set(a_lddmm)
     for variant in VARIANTS:
@@ -33,7 +35,7 @@ def test_config_builds_the_chosen_space_and_keeps_lddmm_hashes():
     atlas = COHORT.atlas
     assert isinstance(make_space(StudyConfig(), atlas, 1.0), LDDMMLandmarks)
     assert isinstance(make_space(StudyConfig(deformation="svf"), atlas, 1.0), SVFLandmarks)
-    assert "deformation" not in StudyConfig().as_dict()
+    assert StudyConfig().as_dict()["deformation"] == "lddmm"
     assert StudyConfig(deformation="svf").as_dict()["deformation"] == "svf"
     with pytest.raises(ValueError, match="deformation"):
         make_space(StudyConfig(deformation="lddmm2"), atlas, 1.0)

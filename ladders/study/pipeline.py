@@ -17,14 +17,15 @@ errors and the ladders share is computed once.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
 from manifolds.errors import ConvergenceWarning
-from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks, group_pole_ladder
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, group_pole_ladder
 from manifolds.point_distance import point_distance
 from manifolds.residual import ResidualAugmented
 
@@ -33,7 +34,7 @@ from ..symmetry_errors import symmetry_errors
 from .area_strain import area_strain, area_strain_error
 from .cohort import Subject
 
-__all__ = ["StudyConfig", "run_subject", "VARIANTS", "ERROR_NAMES"]
+__all__ = ["StudyConfig", "DEFAULT_REGISTRATION", "run_subject", "VARIANTS", "ERROR_NAMES"]
 
 VARIANTS = ("residual", "no_residual")
 ERROR_NAMES = ("midpoint_distance", "centrality", "involutivity", "transvectivity")
@@ -45,32 +46,28 @@ UNITS = {
 }
 
 
-@dataclass
+#: Registration settings of the default study (``docs/study.md``, "Settings chosen by
+#: measurement"): 45 grid control points at ``sigma = 20`` mm, Euler, to the optimiser's
+#: tolerance.
+DEFAULT_REGISTRATION = RegistrationSettings(sigma=20.0, control_points="grid", max_iter=2000)
+
+
+@dataclass(frozen=True)
 class StudyConfig:
     """Parameters of the study (all of them enter the results' hash).
 
     Attributes
     ----------
+    registration : RegistrationSettings
+        Every setting of the registrations: kernel width (in the meshes' units, mm
+        for the built-in cohort), control points (``"grid"``: spacing ``sigma`` over
+        the template's bounding box, ``"finegrid"``: spacing ``sigma / 2``,
+        ``"dense"``: the mesh vertices), their optimisation (eq. 3), integrator and
+        steps, solver, stopping rule, tolerances, iteration limit, kernel backend.
     alpha2 : tuple of float
         Sweep of the regularisation ``alpha^2`` of eq. 3.
-    sigma : float
-        Kernel width, in the meshes' units (mm for the built-in cohort).
-    control_points : str
-        ``"grid"`` (spacing ``sigma`` over the template's bounding box), ``"finegrid"``
-        (spacing ``sigma / 2``) or ``"dense"`` (the mesh vertices).
-    integrator : str
-        ``"euler"``, ``"rk2"`` or ``"rk4"``.
-    n_steps : int
-        Time steps of the shooting.
-    max_iter : int
-        L-BFGS-B iterations of each registration.
-    ftol : float
-        L-BFGS-B stopping test on the relative decrease of the objective
-        (:class:`manifolds.numerics.LBFGSOptions`).
     fanning_steps : int
         Steps of the fanning scheme.
-    kernel_backend : str
-        ``"auto"`` (numba when it imports), ``"numpy"`` or ``"numba"``.
     deformation : str
         ``"lddmm"`` (:class:`~manifolds.lddmm.LDDMMLandmarks`) or ``"svf"``
         (:class:`~manifolds.lddmm.SVFLandmarks`). The fanning scheme integrates
@@ -79,31 +76,46 @@ class StudyConfig:
     distance : str
         Unit of the errors, the registration error and the inverse consistency:
         ``"rms"`` (per-vertex RMS distance, the paper's mm), ``"frobenius"`` or ``"mean"``.
-    optimize_control_points : bool
-        Optimise the control points with the momenta (eq. 3), starting from the policy's.
     """
 
+    registration: RegistrationSettings = DEFAULT_REGISTRATION
     alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
-    sigma: float = 20.0
-    control_points: str = "grid"
-    integrator: str = "euler"
-    n_steps: int = 10
-    max_iter: int = 2000
-    ftol: float = 1e-11
     fanning_steps: int = 10
-    kernel_backend: str = "auto"
     deformation: str = "lddmm"
     distance: str = "rms"
-    optimize_control_points: bool = False
+
+    def __post_init__(self):
+        if not isinstance(self.registration, RegistrationSettings):
+            raise TypeError(
+                "StudyConfig: registration: expected RegistrationSettings, got "
+                f"{type(self.registration).__name__}"
+            )
+        object.__setattr__(self, "alpha2", tuple(float(a) for a in self.alpha2))
+
+    @classmethod
+    def build(cls, **fields) -> StudyConfig:
+        """A configuration from study fields and registration settings given together.
+
+        ``StudyConfig.build(alpha2=(1.0,), sigma=20.0, max_iter=15)`` sets ``alpha2``
+        and overrides ``sigma`` and ``max_iter`` of :data:`DEFAULT_REGISTRATION`
+        (or of ``registration=`` when given).
+        """
+        own = {f.name for f in dataclasses.fields(cls)}
+        study = {k: v for k, v in fields.items() if k in own}
+        changes = {k: v for k, v in fields.items() if k not in own}
+        base = study.pop("registration", DEFAULT_REGISTRATION)
+        return cls(registration=base.replace(**changes), **study)
 
     def as_dict(self) -> dict:
-        d = asdict(self)
-        d["alpha2"] = [float(a) for a in self.alpha2]
-        if d["deformation"] == "lddmm":  # the default: results hashed before it existed stay valid
-            del d["deformation"]
-        if d["ftol"] == 1e-11:  # the optimiser's default, as before the option existed
-            del d["ftol"]
-        return d
+        """JSON-ready fields; the registration settings as their own dict and key."""
+        return {
+            "registration": self.registration.as_dict(),
+            "registration_key": self.registration.key(),
+            "alpha2": [float(a) for a in self.alpha2],
+            "fanning_steps": self.fanning_steps,
+            "deformation": self.deformation,
+            "distance": self.distance,
+        }
 
 
 def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
@@ -117,14 +129,8 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
     return spaces[config.deformation](
         n_landmarks=k,
         dim=d,
-        sigma=config.sigma,
         alpha=float(np.sqrt(alpha2)),
-        control_points=config.control_points,
-        integrator=config.integrator,
-        n_steps=config.n_steps,
-        optimizer={"max_iter": config.max_iter, "ftol": config.ftol},
-        backend=config.kernel_backend,
-        optimize_control_points=config.optimize_control_points,
+        settings=config.registration,
     )
 
 

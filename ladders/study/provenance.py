@@ -59,9 +59,7 @@ def _kernel_backend(outcome, config) -> list[str]:
     ran = {d.get("kernel_backend") for r in outcome.results for d in r["alpha2"].values()} - {None}
     if ran:
         return sorted(ran)
-    from manifolds.lddmm.kernels import GaussianKernel
-
-    return [GaussianKernel(config.sigma, backend=config.kernel_backend).backend]
+    return [config.registration.resolved_backend()]
 
 
 def _counts(outcome) -> dict:
@@ -94,7 +92,7 @@ def build_manifest(outcome, config, atlas, faces, jobs: int, data: dict, input_f
         "command_line": list(sys.argv),
         "seed": data.get("seed"),
         "config": config.as_dict(),
-        "kernel_backend_requested": config.kernel_backend,
+        "kernel_backend_requested": config.registration.kernel_backend,
         "kernel_backend": _kernel_backend(outcome, config),
         "results_folder": f"results/{outcome.config_id}",
         "data": data,

@@ -285,7 +285,7 @@ def _config(args, deformation: str):
     from .pipeline import StudyConfig
 
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
-    return StudyConfig(
+    return StudyConfig.build(
         alpha2=tuple(alpha2),
         sigma=args.sigma,
         control_points=args.control_points,
@@ -335,7 +335,7 @@ def _run_one(args, cohort, description, config, output: Path):
     print(summary_markdown(summarize(outcome.results)))
     print(
         f"Registrations: {n_regs}; {n_bad} stopped at the iteration limit (--max-iter "
-        f"{config.max_iter}) before meeting the optimiser's tolerance."
+        f"{config.registration.max_iter}) before meeting the optimiser's tolerance."
     )
     print("Files:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
     return outcome

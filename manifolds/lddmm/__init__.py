@@ -4,8 +4,11 @@
   share (control points, registration cache, log, metric, sampling);
 - :mod:`.space`: :class:`LDDMMLandmarks`, the connection (``exp`` = Hamiltonian
   shooting, ``log`` = registration, inverse consistency);
+- :mod:`.settings`: :class:`RegistrationSettings`, every setting of a registration
+  in one frozen object (its stable ``key`` names caches and result folders);
 - :mod:`.registration`: the registration objective (eq. 3), its exact gradient and
-  the L-BFGS-B driver; :mod:`.preconditioner`: the optimiser's change of variables;
+  the driver; :mod:`.registration_problem`: the problem as solvers see it;
+  :mod:`.preconditioner`: the optimiser's change of variables;
 - :mod:`.shooting`: Hamiltonian shooting of control points and momenta and its adjoint;
 - :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
   (numpy reference or the compiled :mod:`.kernels_numba`);
@@ -24,6 +27,8 @@ from .control_points import POLICIES, grid_control_points, resolve_control_point
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
+from .registration_problem import RegistrationProblem
+from .settings import RegistrationSettings
 from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
 from .stationary_flow import (
@@ -53,6 +58,8 @@ __all__ = [
     "GaussianKernel",
     "numba_available",
     "RegistrationResult",
+    "RegistrationSettings",
+    "RegistrationProblem",
     "register",
     "registration_objective",
     "ShootingResult",

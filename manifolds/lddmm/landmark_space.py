@@ -18,19 +18,17 @@ import hashlib
 from abc import abstractmethod
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import asdict
 
 import numpy as np
 
 from ..connection import Connection
 from ..errors import ManifoldError
-from ..numerics.integrators import Integrator, get_integrator
-from ..numerics.optimizers import LBFGSOptions
+from ..numerics.integrators import get_integrator
 from ..point_distance import point_distance
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
-from .control_points import AUTO_THRESHOLD, MAX_CONTROL_POINTS, resolve_control_points
-from .kernels import GaussianKernel
+from .control_points import resolve_control_points
 from .registration import RegistrationResult
+from .settings import RegistrationSettings
 from .shapes import random_shape
 from .tangent import LandmarkTangent
 
@@ -46,47 +44,35 @@ class KernelLandmarkSpace(Connection):
         Number of landmarks (mesh vertices) ``k``.
     dim : int
         Ambient dimension ``d`` (2 or 3).
-    sigma : float
-        Width of the Gaussian kernel ``K(x, y) = exp(-|x - y|^2 / sigma^2)``.
+    sigma : float, optional
+        Width of the Gaussian kernel ``K(x, y) = exp(-|x - y|^2 / sigma^2)``
+        (``settings.sigma`` when ``settings`` is given).
     alpha : float
-        Regularisation of the registration: ``C = ||S - phi(T)||^2 + alpha^2 ||v||_H^2``.
-    control_points : {"auto", "dense", "grid"} or array of shape ``(n_cp, d)``, default "auto"
-        Control-point policy (see :mod:`manifolds.lddmm.control_points`).
-    integrator : {"euler", "rk2", "rk4"} or Integrator, optional
-        Defaults to the class's ``default_integrator``.
-    n_steps : int, default 10
-    optimizer : LBFGSOptions or dict, optional
-        Settings of the registration's L-BFGS-B.
+        Regularisation of the registration: ``C = D(phi(T)) + alpha^2 ||v||_H^2``.
+    settings : RegistrationSettings, optional
+        Every setting of the registrations (kernel, control points, integrator,
+        solver, stopping rule). Keyword arguments named after its fields
+        (``control_points="grid"``, ``n_steps=20``, ``stopping="shape"``, ...)
+        override it; without ``settings`` they build one with ``sigma``. An
+        integrator left to None is the class's ``default_integrator``.
     cache_size : int, default 16
         Number of registrations kept (LRU) so that ``log``, ``log_with_residual``
         and ``register`` on the same pair register only once.
-    backend : {"auto", "numpy", "numba"}, default "auto"
-        Kernel sums; ``"auto"`` uses numba when it imports.
     block_size : int, optional
-        Kernel-matrix entries per block of the numpy backend.
-    auto_threshold : int
-        Vertex count above which ``"auto"`` switches from dense to grid control points.
-    precondition : bool, default True
-        Preconditioned L-BFGS variables (see ``docs/lddmm.md``).
-    optimize_control_points : bool, default False
-        Register over the control points and the momenta (eq. 3), starting from
-        the policy's control points (spaces with ``can_optimize_control_points``).
-        ``log`` then returns a :class:`~manifolds.lddmm.LandmarkTangent` carrying
-        its control points; ``exp`` accepts those and plain momenta at the
-        policy's control points.
-    max_control_points : int, default 20000
-        Budget of a grid of control points: a ``sigma`` so small against the
-        template's extent that the grid would exceed it raises an error before
-        anything is allocated (see :mod:`manifolds.lddmm.control_points`).
+        Kernel-matrix entries per block of the numpy kernel backend (memory only).
 
     Attributes
     ----------
+    settings : RegistrationSettings
+        The settings in use (integrator resolved).
     n_registrations : int
         Registrations computed (cache hits excluded).
     n_unconverged : int
-        Among them, those that stopped before meeting the optimiser's tolerance.
+        Among them, those that stopped before meeting the stopping rule.
     n_iterations : int
         Optimiser iterations of those registrations.
+    n_flow_evaluations : int
+        Flow passes (forward, adjoint, tangent-linear) of those registrations.
     max_gradient_norm : float
         Largest final gradient (:attr:`RegistrationResult.gradient_norm`) among them.
     """
@@ -95,70 +81,91 @@ class KernelLandmarkSpace(Connection):
     supports_batch = False
     #: Whether the deformation model can optimise its control points in ``log``.
     can_optimize_control_points = False
-    #: Integrator used when none is given.
+    #: Integrator used when the settings leave it to None.
     default_integrator = "euler"
 
     def __init__(
         self,
         n_landmarks: int,
         dim: int,
-        sigma: float,
-        alpha: float,
-        control_points="auto",
-        integrator: str | Integrator | None = None,
-        n_steps: int = 10,
-        optimizer: LBFGSOptions | dict | None = None,
+        sigma: float | None = None,
+        alpha: float | None = None,
+        settings: RegistrationSettings | None = None,
+        *,
         cache_size: int = 16,
-        backend: str = "auto",
         block_size: int | None = None,
-        auto_threshold: int = AUTO_THRESHOLD,
-        precondition: bool = True,
-        optimize_control_points: bool = False,
-        max_control_points: int = MAX_CONTROL_POINTS,
+        **overrides,
     ):
         name = type(self).__name__
-        if optimize_control_points and not self.can_optimize_control_points:
+        settings = self._make_settings(sigma, settings, overrides)
+        if settings.optimize_control_points and not self.can_optimize_control_points:
             raise ManifoldError(
                 f"{name}: optimize_control_points: this space keeps its control points fixed "
                 "(only LDDMMLandmarks optimises them)"
             )
-        self.optimize_control_points = bool(optimize_control_points)
+        if alpha is None:
+            raise ManifoldError(f"{name}: alpha: the regularisation weight is required")
         n_landmarks = check_int(n_landmarks, f"{name}: n_landmarks", minimum=1)
         if isinstance(dim, bool) or dim not in (2, 3):
             raise ManifoldError(f"{name}: dim: expected 2 or 3, got {dim!r}")
-        sigma = check_float(sigma, f"{name}: sigma", minimum=0.0, strict=True)
         self.alpha = check_float(alpha, f"{name}: alpha", minimum=0.0)
-        self.n_steps = check_int(n_steps, f"{name}: n_steps", minimum=1)
         self.point_shape = (n_landmarks, int(dim))
-        self.kernel = GaussianKernel(sigma, backend=backend, block_size=block_size)
-        self.sigma = self.kernel.sigma
-        self.max_control_points = check_int(
-            max_control_points, f"{name}: max_control_points", minimum=1
-        )
-        self.control_points_policy = self._check_policy(control_points, int(dim))
-        self.integrator = get_integrator(
-            self.default_integrator if integrator is None else integrator
-        )
-        self.optimizer = LBFGSOptions.coerce(optimizer, f"{name}: optimizer")
+        policy = settings.control_points_policy
+        if not isinstance(policy, str) and policy.shape[1] != dim:
+            raise ManifoldError(
+                f"{name}: control_points must have shape (n_cp, {dim}), got {policy.shape}"
+            )
+        self.settings = settings
+        self.kernel = settings.make_kernel(block_size)
+        self.integrator = get_integrator(settings.integrator)
         self.cache_size = check_int(cache_size, f"{name}: cache_size", minimum=0)
-        self.auto_threshold = check_int(auto_threshold, f"{name}: auto_threshold", minimum=0)
-        self.precondition = bool(precondition)
         self._cache: OrderedDict = OrderedDict()
         self.n_registrations = 0
         self.n_unconverged = 0
         self.n_iterations = 0
+        self.n_flow_evaluations = 0
         self.max_gradient_norm = 0.0
 
-    def _check_policy(self, control_points, dim: int):
-        if isinstance(control_points, str):
-            resolve_control_points(np.zeros((1, dim)), control_points, self.sigma)
-            return control_points
-        policy = check_array(control_points, (dim,), f"{self.name}: control_points")
-        if policy.ndim != 2:
-            raise ManifoldError(
-                f"{self.name}: control_points must have shape (n_cp, {dim}), got {policy.shape}"
+    def _make_settings(self, sigma, settings, overrides) -> RegistrationSettings:
+        name = type(self).__name__
+        if settings is None:
+            if sigma is None:
+                raise ManifoldError(f"{name}: sigma: the kernel width is required")
+            settings = RegistrationSettings(sigma=sigma)
+        elif not isinstance(settings, RegistrationSettings):
+            raise TypeError(
+                f"{name}: settings: expected RegistrationSettings, got {type(settings).__name__}"
             )
-        return policy
+        elif sigma is not None:
+            overrides = {"sigma": sigma, **overrides}
+        try:
+            settings = settings.replace(**overrides)
+        except ManifoldError as exc:
+            raise ManifoldError(f"{name}: {exc}") from None
+        if settings.integrator is None:
+            settings = settings.replace(integrator=self.default_integrator)
+        return settings
+
+    # ------------------------------------------------------------ settings views
+    @property
+    def sigma(self) -> float:
+        """Kernel width."""
+        return self.settings.sigma
+
+    @property
+    def n_steps(self) -> int:
+        """Time steps of the flow."""
+        return self.settings.n_steps
+
+    @property
+    def control_points_policy(self):
+        """Control-point policy name, or the user's control points ``(n_cp, d)``."""
+        return self.settings.control_points_policy
+
+    @property
+    def optimize_control_points(self) -> bool:
+        """Whether ``log`` optimises the control points with the momenta."""
+        return self.settings.optimize_control_points
 
     def __repr__(self) -> str:
         k, d = self.point_shape
@@ -201,8 +208,8 @@ class KernelLandmarkSpace(Connection):
             point,
             self.control_points_policy,
             self.sigma,
-            self.auto_threshold,
-            self.max_control_points,
+            self.settings.auto_threshold,
+            self.settings.max_control_points,
         )
 
     def kernel_matrix(self, control_points) -> np.ndarray:
@@ -247,20 +254,7 @@ class KernelLandmarkSpace(Connection):
         h = hashlib.blake2b(digest_size=20)
         for arr in (template, target, initial_momenta, start):
             h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
-        policy = self.control_points_policy
-        params = (
-            type(self).__name__,
-            self.point_shape,
-            self.sigma,
-            self.alpha,
-            policy if isinstance(policy, str) else policy.tobytes(),
-            self.integrator,
-            self.n_steps,
-            tuple(sorted(asdict(self.optimizer).items())),
-            self.precondition,
-            self.auto_threshold,
-            self.optimize_control_points,
-        )
+        params = (type(self).__name__, self.point_shape, self.alpha, self.settings.key())
         h.update(repr(params).encode())
         return h.digest()
 
@@ -299,9 +293,11 @@ class KernelLandmarkSpace(Connection):
         self.n_registrations += 1
         self.n_unconverged += not result.converged
         self.n_iterations += result.n_iter
+        self.n_flow_evaluations += result.n_flow_evaluations
         self.max_gradient_norm = max(self.max_gradient_norm, result.gradient_norm)
         for arr in (result.momenta, result.residual, result.deformed, result.control_points):
-            arr.setflags(write=False)
+            if arr is not None:
+                arr.setflags(write=False)
         if self.cache_size > 0:
             self._cache[key] = result
             while len(self._cache) > self.cache_size:

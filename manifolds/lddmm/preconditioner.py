@@ -1,11 +1,13 @@
 """Change of variables of the registration's optimiser (``docs/lddmm.md``).
 
-L-BFGS-B works on ``z = R^T mu`` rather than on the momenta ``mu`` themselves.
+The optimiser works on ``z = R^T mu`` rather than on the momenta ``mu`` themselves.
 With ``R R^T = K_xc^T K_xc + alpha^2 K_cc + eps I``, the Gauss-Newton Hessian of
 the linearised registration problem (``phi_1(T) ~ T + K_xc mu``), the objective
-is close to isotropic in ``z`` and its minimiser is the optimiser's start.
-Above :data:`PRECONDITION_MAX_CP` control points the dense factor is replaced
-by a diagonal scaling; without preconditioning ``z = mu``.
+is close to isotropic in ``z``, and the minimiser of the linearised problem is
+the optimiser's start. Above :data:`PRECONDITION_MAX_CP` control points the dense
+factor is replaced by a diagonal scaling (:class:`DiagonalPreconditioner`), which
+has no cheap linearised minimiser: the optimiser then starts from zero momenta.
+Without preconditioning ``z = mu`` and the start is zero momenta as well.
 """
 
 from __future__ import annotations
@@ -47,8 +49,12 @@ class Preconditioner:
         """Gradient with respect to ``z`` from the gradient with respect to ``mu``."""
         raise NotImplementedError
 
-    def linearised_start(self, kernel, template, target, control_points) -> np.ndarray:
-        """Start of the optimiser, shape ``(n_cp, d)`` (zero momenta by default)."""
+    def linearised_start(self, kernel, template, displacement, control_points) -> np.ndarray:
+        """Start of the optimiser, shape ``(n_cp, d)`` (zero momenta by default).
+
+        ``displacement`` (``(k, d)`` or None) is what the linearised problem fits
+        (``S - T`` for a target in correspondence).
+        """
         return np.zeros(control_points.shape)
 
 
@@ -101,9 +107,12 @@ class CholeskyPreconditioner(Preconditioner):
     def gradient_to_variables(self, g_mu):
         return self.kernel.solve_triangular(self.chol, g_mu, transpose=False)
 
-    def linearised_start(self, kernel, template, target, control_points):
-        """Minimiser of the linearised problem, ``(R R^T)^{-1} K_xc^T (S - T)``."""
-        rhs = kernel.convolve(control_points, template, target - template)
+    def linearised_start(self, kernel, template, displacement, control_points):
+        """Minimiser of the linearised problem, ``(R R^T)^{-1} K_xc^T (S - T)``
+        (zero momenta when ``displacement`` is None)."""
+        if displacement is None:
+            return np.zeros(control_points.shape)
+        rhs = kernel.convolve(control_points, template, displacement)
         return scipy.linalg.cho_solve((self.chol, True), rhs, check_finite=False)
 
 

@@ -1,19 +1,22 @@
 """LDDMM registration of landmark shapes: the logarithm of the landmark space.
 
-The registration of a template ``T`` onto a target ``S`` minimises, over the
-initial momenta ``mu`` at fixed control points ``c`` (paper, eq. 3)::
+The registration of a template ``T`` onto a target minimises, over the initial
+momenta ``mu`` (and, optionally, the control points ``c``) (paper, eq. 3)::
 
-    C(mu) = || S - phi_1(T) ||_2^2 + alpha^2 || v_0 ||_H^2,
+    C(c, mu) = D(phi_1(T)) + alpha^2 || v_0 ||_H^2,
     || v_0 ||_H^2 = sum_ij K(c_i, c_j) mu_i . mu_j,
 
-where ``phi_1`` is the discrete flow of :mod:`manifolds.lddmm.shooting`.
-The gradient is exact for the discretised objective: the data term is
-back-propagated through the Runge-Kutta steps by a hand-written adjoint and
-the regulariser contributes ``2 alpha^2 K mu``.
+where ``phi_1`` is the discrete flow of :mod:`manifolds.lddmm.shooting` and ``D`` a
+data term (:mod:`manifolds.data_terms`): for shapes in correspondence, the squared
+distance ``|| S - phi_1(T) ||_2^2`` of the paper. The gradient is exact for the
+discretised objective: the data term's gradient is back-propagated through the
+Runge-Kutta steps by a hand-written adjoint and the regulariser contributes
+``2 alpha^2 K mu``.
 
-The optimiser (L-BFGS-B) works on preconditioned variables ``z = R^T mu``
-(:mod:`manifolds.lddmm.preconditioner`) and starts from the minimiser of the
-linearised problem. See ``docs/lddmm.md``.
+Every setting (kernel, control points, integrator, solver, stopping rule) comes
+from one :class:`~manifolds.lddmm.RegistrationSettings`; the optimiser works on
+preconditioned variables (:mod:`manifolds.lddmm.preconditioner`) and starts from
+the minimiser of the linearised problem. See ``docs/lddmm.md``.
 """
 
 from __future__ import annotations
@@ -23,23 +26,30 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from manifolds.data_terms import DataTerm, SquaredDistance
+
 from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
-from ..numerics.optimizers import LBFGSOptions, minimize_lbfgsb
+from ..numerics.solvers import StoppingRule, get_solver
+from .control_points import resolve_control_points
 from .kernels import GaussianKernel
 from .preconditioner import make_preconditioner
+from .registration_problem import RegistrationProblem, is_dense
+from .settings import RegistrationSettings
 from .shooting import shoot, shooting_vjp
 
 __all__ = [
     "RegistrationResult",
+    "as_data_term",
     "registration_objective",
     "register",
+    "run_registration",
 ]
 
 
 @dataclass
 class RegistrationResult:
-    """Outcome of a registration of ``template`` onto ``target``.
+    """Outcome of a registration of ``template`` onto a target.
 
     Attributes
     ----------
@@ -48,53 +58,69 @@ class RegistrationResult:
     control_points : array, shape ``(n_cp, d)``
     deformed : array, shape ``(k, d)``
         ``phi_1(T)``.
-    residual : array, shape ``(k, d)``
-        ``delta = S - phi_1(T)`` (paper, eq. 4).
+    residual : array, shape ``(k, d)``, or None
+        ``delta = S - phi_1(T)`` (paper, eq. 4) for a target in correspondence;
+        None for data terms without correspondence.
     objective : float
-        Final value of ``C(mu)`` (eq. 3).
+        Final value of ``C(c, mu)`` (eq. 3).
     registration_error : float
-        ``||delta||_2`` (L2 norm over all vertices).
-    rms_error : float
-        ``||delta||_2 / sqrt(k)``, root mean square vertex distance.
+        ``sqrt(D(phi_1(T)))``: ``||delta||_2`` (L2 norm over all vertices) for a
+        target in correspondence.
+    rms_error : float or None
+        ``||delta||_2 / sqrt(k)``, the root mean square vertex distance (None
+        without correspondence).
     rkhs_norm : float
         ``||v_0||_H``.
     n_iter, n_evals : int
         Optimiser iterations and objective evaluations.
+    n_flow_evaluations : int
+        Passes through the flow: forward shootings, adjoint and tangent-linear passes.
     history : list of float
         Objective at the initial momenta and after every iteration.
     converged : bool
+        Whether the settings' stopping rule was met.
     message : str
+        Why the optimiser stopped.
     gradient_norm : float
         Largest entry of the final gradient in the optimiser's (preconditioned,
-        normalised) variables, the quantity L-BFGS-B compares with ``gtol``.
+        normalised) variables.
+    predicted_change : float
+        Per-vertex RMS change of ``phi_1(T)`` predicted for a further Newton step
+        from the final gradient (the ``"shape"`` rule's second test).
+    settings_key : str
+        :meth:`RegistrationSettings.key` of the settings used.
     """
 
     momenta: np.ndarray
     control_points: np.ndarray
     deformed: np.ndarray
-    residual: np.ndarray
+    residual: np.ndarray | None
     objective: float
     registration_error: float
-    rms_error: float
+    rms_error: float | None
     rkhs_norm: float
     n_iter: int
     n_evals: int
+    n_flow_evaluations: int = 0
     history: list = field(default_factory=list)
     converged: bool = False
     message: str = ""
     gradient_norm: float = float("nan")
+    predicted_change: float = float("nan")
+    settings_key: str = ""
 
 
-def is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
-    return control_points is template or (
-        control_points.shape == template.shape and np.array_equal(control_points, template)
-    )
+def as_data_term(target) -> DataTerm:
+    """``target`` as a data term: a :class:`DataTerm` as given, points as :class:`SquaredDistance`."""
+    if isinstance(target, DataTerm):
+        return target
+    return SquaredDistance(target)
 
 
 def registration_objective(
     kernel: GaussianKernel,
     template: np.ndarray,
-    target: np.ndarray,
+    target,
     control_points: np.ndarray,
     momenta: np.ndarray,
     alpha: float,
@@ -114,6 +140,11 @@ def registration_objective(
     (back-propagated data term) plus the regulariser's
     ``d(alpha^2 <mu, K(c, c) mu>)/dc_i = -2 alpha^2 dmu_i/dt(0)``.
 
+    Parameters
+    ----------
+    target : array ``(k, d)`` or DataTerm
+        The target shape in correspondence, or any data term of the deformed points.
+
     Returns
     -------
     value : float
@@ -122,6 +153,7 @@ def registration_objective(
     deformed : array, shape ``(k, d)``, ``phi_1(T)``
     rkhs_sq : float, ``||v_0||_H^2``
     """
+    data_term = as_data_term(target)
     dense = not control_points_gradient and is_dense(template, control_points)
     res = shoot(
         kernel,
@@ -133,12 +165,11 @@ def registration_objective(
         keep_stages=with_gradient,
     )
     deformed = res.control_points if dense else res.points
-    resid = target - deformed
     rkhs_sq = float((momenta * res.initial_velocity).sum())
-    value = float((resid * resid).sum()) + alpha**2 * rkhs_sq
     if not with_gradient:
-        return value, None, deformed, rkhs_sq
-    cot = -2.0 * resid
+        return data_term.value(deformed) + alpha**2 * rkhs_sq, None, deformed, rkhs_sq
+    data_value, cot = data_term.value_and_gradient(deformed)
+    value = data_value + alpha**2 * rkhs_sq
     if dense:
         g_c, g_mu, _ = shooting_vjp(kernel, res, cot_control_points=cot)
     else:
@@ -155,70 +186,66 @@ def registration_objective(
 def register(
     template,
     target,
-    kernel: GaussianKernel,
     alpha: float,
+    settings: RegistrationSettings,
+    *,
     control_points: np.ndarray | None = None,
-    integrator: str | Integrator = "euler",
-    n_steps: int = 10,
     initial_momenta=None,
-    options: LBFGSOptions | None = None,
-    precondition: bool = True,
-    rel_ridge: float = 1e-2,
+    kernel: GaussianKernel | None = None,
     warn: bool = True,
-    optimize_control_points: bool = False,
-    control_point_scale: float | None = None,
 ) -> RegistrationResult:
-    """Register ``template`` onto ``target`` by minimising eq. (3) with L-BFGS-B.
-
-    The momenta (and, with ``optimize_control_points``, the control points) minimise
-    ``C(c, mu)``; the gradient is exact (:func:`registration_objective`).
+    """Register ``template`` onto ``target`` by minimising eq. (3).
 
     Parameters
     ----------
-    template, target : arrays, shape ``(k, d)``
-    kernel : GaussianKernel
+    template : array, shape ``(k, d)``
+    target : array ``(k, d)`` or DataTerm
+        The target shape in correspondence with the template, or a data term
+        (e.g. a varifold distance to a mesh with another triangulation).
     alpha : float
         Regularisation weight (``alpha^2`` multiplies ``||v_0||_H^2``).
+    settings : RegistrationSettings
+        Kernel, control points, integrator, solver and stopping rule. Its
+        integrator defaults to Euler here.
     control_points : array, shape ``(n_cp, d)``, optional
-        Defaults to the template's vertices.
-    integrator, n_steps
-        Discretisation of the flow.
+        Overrides the settings' policy (with ``optimize_control_points``, the start).
     initial_momenta : array, shape ``(n_cp, d)``, optional
         Warm start; defaults to the minimiser of the linearised problem when the
-        preconditioner is used, zero otherwise.
-    options : LBFGSOptions, optional
-    precondition : bool, default True
-        Optimise ``z = R^T mu`` (see :mod:`manifolds.lddmm.preconditioner`: dense
-        Cholesky up to ``PRECONDITION_MAX_CP`` control points, a diagonal scaling above).
-    rel_ridge : float
-        Ridge of the preconditioner relative to the mean of its diagonal.
+        preconditioner is used and the data term has a linear target, zero otherwise.
+    kernel : GaussianKernel, optional
+        A kernel of width ``settings.sigma`` to reuse (e.g. with its block size).
     warn : bool
-        Emit a :class:`ConvergenceWarning` when the optimiser did not converge.
-    optimize_control_points : bool, default False
-        Minimise eq. (3) over the control points and the momenta jointly,
-        starting from ``control_points``; the result holds the optimised ones.
-    control_point_scale : float, optional
-        The optimiser's variable for the control points is ``c / scale``
-        (default ``kernel.sigma``), next to the preconditioned ``z`` of the momenta.
+        Emit a :class:`ConvergenceWarning` when the stopping rule was not met.
     """
     return run_registration(
         registration_objective,
         "LDDMM",
         template,
         target,
-        kernel,
         alpha,
-        control_points,
-        integrator,
-        n_steps,
-        initial_momenta,
-        options,
-        precondition,
-        rel_ridge,
-        warn,
-        optimize_control_points,
-        control_point_scale,
+        settings,
+        control_points=control_points,
+        initial_momenta=initial_momenta,
+        kernel=kernel,
+        warn=warn,
+        default_integrator="euler",
     )
+
+
+def _check_settings(settings, kernel, label):
+    if not isinstance(settings, RegistrationSettings):
+        raise TypeError(
+            f"{label} registration: settings: expected RegistrationSettings, got "
+            f"{type(settings).__name__}"
+        )
+    if kernel is None:
+        return settings.make_kernel()
+    if not isinstance(kernel, GaussianKernel) or kernel.sigma != settings.sigma:
+        raise ValueError(
+            f"{label} registration: kernel: expected a GaussianKernel of width "
+            f"settings.sigma = {settings.sigma:g}, got {kernel!r}"
+        )
+    return kernel
 
 
 def run_registration(
@@ -226,139 +253,55 @@ def run_registration(
     label: str,
     template,
     target,
-    kernel: GaussianKernel,
     alpha: float,
+    settings: RegistrationSettings,
+    *,
     control_points=None,
-    integrator: str | Integrator = "euler",
-    n_steps: int = 10,
     initial_momenta=None,
-    options: LBFGSOptions | None = None,
-    precondition: bool = True,
-    rel_ridge: float = 1e-2,
+    kernel: GaussianKernel | None = None,
     warn: bool = True,
-    optimize_control_points: bool = False,
-    control_point_scale: float | None = None,
+    default_integrator: str = "euler",
 ) -> RegistrationResult:
-    """The L-BFGS-B driver shared by the LDDMM and SVF registrations.
+    """The driver shared by the LDDMM and SVF registrations.
 
-    ``objective(kernel, template, target, control_points, momenta, alpha,
-    integrator, n_steps, control_points_gradient=...)`` returns ``(value,
-    gradient, deformed, norm_sq)`` as :func:`registration_objective` does; ``label``
-    names the model in the convergence warning. The other parameters are those of
-    :func:`register`.
+    ``objective`` has the signature of :func:`registration_objective`; ``label``
+    names the model in messages. The other parameters are those of :func:`register`.
     """
+    kernel = _check_settings(settings, kernel, label)
     template = np.asarray(template, dtype=float)
-    target = np.asarray(target, dtype=float)
-    cp = template if control_points is None else np.asarray(control_points, dtype=float)
-    dense = is_dense(template, cp)
-    n_cp, dim = cp.shape
+    data_term = as_data_term(target)
+    if control_points is None:
+        control_points = resolve_control_points(
+            template,
+            settings.control_points_policy,
+            settings.sigma,
+            settings.auto_threshold,
+            settings.max_control_points,
+        )
+    cp = np.asarray(control_points, dtype=float)
     alpha = float(alpha)
-    pre = make_preconditioner(kernel, template, cp, alpha, dense, precondition, rel_ridge)
+    pre = make_preconditioner(
+        kernel, template, cp, alpha, is_dense(template, cp), settings.precondition,
+        settings.rel_ridge,
+    )  # fmt: skip
     if initial_momenta is not None:
-        mu0 = np.asarray(initial_momenta, dtype=float).reshape(n_cp, dim)
+        mu0 = np.asarray(initial_momenta, dtype=float).reshape(cp.shape)
     else:
-        mu0 = pre.linearised_start(kernel, template, target, cp)
-    c_scale = kernel.sigma if control_point_scale is None else float(control_point_scale)
-    if not (np.isfinite(c_scale) and c_scale > 0):
-        raise ValueError(f"control_point_scale: expected a positive number, got {c_scale!r}")
-    problem = _Problem(objective, kernel, template, target, alpha, integrator, n_steps, pre)
-    problem.optimise, problem.c_scale = optimize_control_points, c_scale
-    x0 = problem.variables(mu0, cp)
-    f_init = problem.evaluate(x0)[0]
-    problem.scale = f_init if f_init > 0 else 1.0
-    opt = minimize_lbfgsb(problem.fun_and_grad, x0, options)
-    mu, c = problem.unpack(opt.x)
-    result = make_result(target, c, mu, problem.evaluate(opt.x), opt, problem.scale)
+        mu0 = pre.linearised_start(kernel, template, data_term.linear_target(template), cp)
+    problem = RegistrationProblem(
+        objective, kernel, template, data_term, alpha,
+        settings.integrator or default_integrator, settings, pre,
+    )  # fmt: skip
+    x0 = problem.start(mu0, cp)
+    opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
+    result = problem.result(opt)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
                 f"{label} registration did not converge after {opt.n_iter} iterations "
                 f"({opt.message}); objective {result.objective:.6g}, "
-                f"RMS residual {result.rms_error:.3g}"
+                f"registration error {result.registration_error:.3g}"
             ),
             stacklevel=3,
         )
     return result
-
-
-class _Problem:
-    """The objective as L-BFGS-B sees it, on ``x = (z[, c / c_scale])``, normalised by ``scale``.
-
-    ``z = R^T mu`` are the preconditioned momenta; the control points are part of
-    ``x`` only when they are optimised. The latest evaluation is kept, so the start
-    (which sets ``scale``) and the final iterate are not shot twice.
-    """
-
-    def __init__(self, objective, kernel, template, target, alpha, integrator, n_steps, pre):
-        self.objective = objective
-        self.kernel, self.template, self.target = kernel, template, target
-        self.alpha, self.integrator, self.n_steps = alpha, integrator, n_steps
-        self.pre, self.optimise, self.c_scale = pre, False, 1.0
-        self.scale = 1.0
-        self.control_points = None
-        self._last: dict = {}
-
-    def variables(self, mu, control_points) -> np.ndarray:
-        """``x`` of the momenta ``mu`` at ``control_points`` (fixed ones are kept aside)."""
-        self.control_points = control_points
-        z = self.pre.to_variables(mu).ravel()
-        return np.concatenate([z, (control_points / self.c_scale).ravel()]) if self.optimise else z
-
-    def unpack(self, x):
-        """Momenta and control points at ``x``."""
-        shape, n = self.control_points.shape, self.control_points.size
-        mu = self.pre.to_momenta(x[:n].reshape(shape))
-        if not self.optimise:
-            return mu, self.control_points
-        return mu, x[n:].reshape(shape) * self.c_scale
-
-    def evaluate(self, x):
-        """Objective, gradient, deformed template and squared RKHS norm at ``x``."""
-        key = x.tobytes()
-        if self._last.get("key") != key:
-            mu, c = self.unpack(x)
-            out = self.objective(
-                self.kernel,
-                self.template,
-                self.target,
-                c,
-                mu,
-                self.alpha,
-                self.integrator,
-                self.n_steps,
-                control_points_gradient=self.optimise,
-            )
-            self._last.update(key=key, out=out)
-        return self._last["out"]
-
-    def fun_and_grad(self, x):
-        """Normalised objective and its gradient with respect to ``x``."""
-        value, grad, _, _ = self.evaluate(x)
-        if not self.optimise:
-            return value / self.scale, self.pre.gradient_to_variables(grad).ravel() / self.scale
-        g_c, g_mu = grad
-        g_z = self.pre.gradient_to_variables(g_mu).ravel()
-        return value / self.scale, np.concatenate([g_z, (self.c_scale * g_c).ravel()]) / self.scale
-
-
-def make_result(target, control_points, momenta, evaluation, opt, scale) -> RegistrationResult:
-    """Assemble a :class:`RegistrationResult` from the final evaluation and the optimiser's run."""
-    value, _, deformed, rkhs_sq = evaluation
-    resid = target - deformed
-    err = float(np.sqrt((resid * resid).sum()))
-    return RegistrationResult(
-        momenta=momenta,
-        control_points=control_points.copy(),
-        deformed=deformed,
-        residual=resid,
-        objective=value,
-        registration_error=err,
-        rms_error=err / np.sqrt(target.shape[0]),
-        rkhs_norm=float(np.sqrt(max(rkhs_sq, 0.0))),
-        n_iter=opt.n_iter,
-        n_evals=opt.n_evals,
-        history=[h * scale for h in opt.history],
-        converged=opt.converged,
-        message=opt.message,
-        gradient_norm=float(np.max(np.abs(opt.grad))) if np.size(opt.grad) else 0.0,
-    )

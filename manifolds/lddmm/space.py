@@ -31,10 +31,9 @@ class LDDMMLandmarks(KernelLandmarkSpace):
     ``optimize_control_points``, over the control points and the momenta. The
     parameters are those of
     :class:`~manifolds.lddmm.landmark_space.KernelLandmarkSpace` (``n_landmarks,
-    dim, sigma, alpha, control_points, integrator, n_steps, optimizer,
-    cache_size, backend, block_size, auto_threshold, precondition,
-    optimize_control_points, max_control_points``); the integrator defaults to
-    ``"euler"``.
+    dim, sigma, alpha, settings, cache_size, block_size`` and keyword overrides of
+    the :class:`~manifolds.lddmm.RegistrationSettings`); the integrator defaults
+    to ``"euler"``.
     """
 
     can_optimize_control_points = True
@@ -111,13 +110,9 @@ class LDDMMLandmarks(KernelLandmarkSpace):
         return register(
             template,
             target,
-            self.kernel,
             self.alpha,
+            self.settings,
             control_points=control_points,
-            integrator=self.integrator,
-            n_steps=self.n_steps,
             initial_momenta=initial_momenta,
-            options=self.optimizer,
-            precondition=self.precondition,
-            optimize_control_points=self.optimize_control_points,
+            kernel=self.kernel,
         )

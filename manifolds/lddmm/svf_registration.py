@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.integrators import Integrator
-from ..numerics.optimizers import LBFGSOptions
 from .kernels import GaussianKernel
-from .registration import RegistrationResult, run_registration
+from .registration import RegistrationResult, as_data_term, run_registration
+from .settings import RegistrationSettings
 from .stationary_flow import kernel_flow, kernel_flow_vjp
 
 __all__ = ["svf_objective", "register_svf"]
@@ -31,25 +31,30 @@ __all__ = ["svf_objective", "register_svf"]
 def svf_objective(
     kernel: GaussianKernel,
     template: np.ndarray,
-    target: np.ndarray,
+    target,
     control_points: np.ndarray,
     momenta: np.ndarray,
     alpha: float,
     integrator: str | Integrator = "rk4",
     n_steps: int = 10,
     with_gradient: bool = True,
+    control_points_gradient: bool = False,
 ):
     """Objective ``C(m)`` of the SVF registration and its exact gradient.
 
     Parameters
     ----------
     kernel : GaussianKernel
-    template, target : arrays, shape ``(k, d)``
+    template : array, shape ``(k, d)``
+    target : array ``(k, d)`` or DataTerm
+        The target in correspondence, or a data term of the deformed points.
     control_points, momenta : arrays, shape ``(n_cp, d)``
     alpha : float
     integrator, n_steps
         Discretisation of the flow ``exp(v)``.
     with_gradient : bool
+    control_points_gradient : bool
+        Must be False: the SVF keeps its control points.
 
     Returns
     -------
@@ -58,66 +63,57 @@ def svf_objective(
     deformed : array, shape ``(k, d)``, ``exp(v)(T)``
     norm_sq : float, ``||v||_V^2``
     """
+    if control_points_gradient:
+        raise ValueError("the SVF registration does not optimise its control points")
+    data_term = as_data_term(target)
     res = kernel_flow(
         kernel, control_points, momenta, template, integrator, n_steps, keep_stages=with_gradient
     )
     deformed = res.points
-    resid = target - deformed
     kv = kernel.convolve(control_points, control_points, momenta)
     norm_sq = float((momenta * kv).sum())
-    value = float((resid * resid).sum()) + alpha**2 * norm_sq
     if not with_gradient:
-        return value, None, deformed, norm_sq
-    _, g_m, _ = kernel_flow_vjp(kernel, control_points, momenta, res, -2.0 * resid)
+        return data_term.value(deformed) + alpha**2 * norm_sq, None, deformed, norm_sq
+    data_value, cot = data_term.value_and_gradient(deformed)
+    _, g_m, _ = kernel_flow_vjp(kernel, control_points, momenta, res, cot)
     g_m += 2.0 * alpha**2 * kv
-    return value, g_m, deformed, norm_sq
+    return data_value + alpha**2 * norm_sq, g_m, deformed, norm_sq
 
 
 def register_svf(
     template,
     target,
-    kernel: GaussianKernel,
     alpha: float,
+    settings: RegistrationSettings,
+    *,
     control_points: np.ndarray | None = None,
-    integrator: str | Integrator = "rk4",
-    n_steps: int = 10,
     initial_momenta=None,
-    options: LBFGSOptions | None = None,
-    precondition: bool = True,
-    rel_ridge: float = 1e-2,
+    kernel: GaussianKernel | None = None,
     warn: bool = True,
 ) -> RegistrationResult:
-    """Register ``template`` onto ``target`` with a stationary field (L-BFGS-B).
+    """Register ``template`` onto ``target`` with a stationary field.
 
-    Parameters and result as :func:`manifolds.lddmm.register`; ``momenta`` are
-    the SVF's momenta (fixed in time) and ``rkhs_norm`` is ``||v||_V``. Emits a
-    :class:`~manifolds.ConvergenceWarning` when ``warn`` and the optimiser did
-    not converge.
+    Parameters and result as :func:`manifolds.lddmm.register` (the integrator
+    defaults to RK4); ``momenta`` are the SVF's momenta (fixed in time) and
+    ``rkhs_norm`` is ``||v||_V``. ``settings.optimize_control_points`` must be
+    False. Emits a :class:`~manifolds.ConvergenceWarning` when ``warn`` and the
+    stopping rule was not met.
     """
+    if settings.optimize_control_points:
+        raise ValueError(
+            "register_svf: settings.optimize_control_points: the SVF registration keeps its "
+            "control points fixed"
+        )
     return run_registration(
-        _svf_objective_for_driver,
+        svf_objective,
         "SVF",
         template,
         target,
-        kernel,
         alpha,
-        control_points,
-        integrator,
-        n_steps,
-        initial_momenta,
-        options,
-        precondition,
-        rel_ridge,
-        warn,
-    )
-
-
-def _svf_objective_for_driver(
-    kernel, template, target, control_points, momenta, alpha, integrator, n_steps, **flags
-):
-    """:func:`svf_objective` with the driver's signature (the SVF keeps its control points)."""
-    if flags.get("control_points_gradient"):
-        raise ValueError("the SVF registration does not optimise its control points")
-    return svf_objective(
-        kernel, template, target, control_points, momenta, alpha, integrator, n_steps
+        settings,
+        control_points=control_points,
+        initial_momenta=initial_momenta,
+        kernel=kernel,
+        warn=warn,
+        default_integrator="rk4",
     )

@@ -66,12 +66,9 @@ class SVFLandmarks(KernelLandmarkSpace):
         return register_svf(
             template,
             target,
-            self.kernel,
             self.alpha,
+            self.settings,
             control_points=control_points,
-            integrator=self.integrator,
-            n_steps=self.n_steps,
             initial_momenta=initial_momenta,
-            options=self.optimizer,
-            precondition=self.precondition,
+            kernel=self.kernel,
         )

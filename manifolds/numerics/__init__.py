@@ -1,9 +1,12 @@
-"""Swappable numerical methods used by the spaces (ODE integration, shooting, optimisation)."""
+"""Swappable numerical methods used by the spaces (ODE integration, shooting, optimisation).
+
+Optimisers live in :mod:`.solvers`, selected by name.
+"""
 
 from .geodesic_ode import GeodesicDomainError, GeodesicIntegrator, GeodesicSolution
 from .integrators import RK2, RK4, Euler, Integrator, get_integrator
-from .optimizers import LBFGSOptions, minimize_lbfgsb
 from .shooting import ShootingSolver
+from .solvers import SOLVERS, OptimizationResult, StoppingRule, get_solver, minimize_lbfgsb
 
 __all__ = [
     "GeodesicDomainError",
@@ -15,6 +18,9 @@ __all__ = [
     "RK2",
     "RK4",
     "get_integrator",
-    "LBFGSOptions",
+    "SOLVERS",
+    "get_solver",
+    "OptimizationResult",
+    "StoppingRule",
     "minimize_lbfgsb",
 ]

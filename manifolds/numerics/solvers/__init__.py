@@ -1,0 +1,41 @@
+"""Optimisers of registrations, selected by name, and their stopping rules.
+
+- :mod:`.result`: :class:`OptimizationResult` and the :class:`SolverProblem`
+  interface a solver works on;
+- :mod:`.stopping`: :class:`StoppingRule` (in the objective's digits, or in the
+  shapes' unit);
+- :mod:`.lbfgsb`: scipy's L-BFGS-B (``"lbfgsb"``);
+- :mod:`.blas`: BLAS thread limits during a run.
+
+:data:`SOLVERS` maps a name (``RegistrationSettings.solver``) to a function
+``(problem, x0, settings) -> OptimizationResult``; :func:`get_solver` looks one up.
+"""
+
+from .blas import limit_blas_threads
+from .lbfgsb import minimize_lbfgsb
+from .result import OptimizationResult, SolverProblem
+from .stopping import StoppingRule
+
+#: Solver name -> ``(problem, x0, settings) -> OptimizationResult``.
+SOLVERS = {"lbfgsb": minimize_lbfgsb}
+
+
+def get_solver(name: str):
+    """The solver registered under ``name`` (:data:`SOLVERS`)."""
+    try:
+        return SOLVERS[name]
+    except KeyError:
+        raise ValueError(
+            f"solver: unknown name {name!r}; choose one of {sorted(SOLVERS)}"
+        ) from None
+
+
+__all__ = [
+    "SOLVERS",
+    "get_solver",
+    "OptimizationResult",
+    "SolverProblem",
+    "StoppingRule",
+    "minimize_lbfgsb",
+    "limit_blas_threads",
+]

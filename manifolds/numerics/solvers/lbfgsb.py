@@ -1,0 +1,108 @@
+"""scipy's L-BFGS-B with the library's stopping rules and an objective history."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.optimize
+
+from .blas import limit_blas_threads
+from .result import OptimizationResult
+from .stopping import StoppingRule
+
+__all__ = ["minimize_lbfgsb"]
+
+
+class _Counted:
+    """``x -> (f, g)`` with the latest evaluation kept (L-BFGS-B asks twice for the same x)."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.n_evals = 0
+        self.key = None
+        self.f = None
+        self.g = None
+
+    def __call__(self, x):
+        key = x.tobytes()
+        if key != self.key:
+            f, g = self.problem.value_and_gradient(x)
+            self.n_evals += 1
+            self.key, self.f, self.g = key, float(f), np.asarray(g, dtype=float).ravel()
+        return self.f, self.g.copy()
+
+
+def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> OptimizationResult:
+    """Minimise ``problem`` from ``x0`` with scipy's L-BFGS-B.
+
+    Parameters
+    ----------
+    problem : SolverProblem
+    x0 : array
+    settings : RegistrationSettings
+        ``max_iter``, ``max_corrections``, ``max_line_search``, ``blas_threads``
+        and the stopping rule's tolerances.
+    rule : StoppingRule, optional
+        Defaults to the rule of ``settings``. With the ``"objective"`` rule, scipy's
+        own ``ftol`` / ``gtol`` test is used (the same test); with ``"shape"``, the
+        rule is checked after every iteration.
+
+    Returns
+    -------
+    OptimizationResult
+    """
+    rule = StoppingRule.from_settings(settings) if rule is None else rule
+    fun = _Counted(problem)
+    x0 = np.asarray(x0, dtype=float).ravel()
+    history: list = []
+    reason: list = []
+
+    def callback(intermediate_result):
+        history.append(float(intermediate_result.fun))
+        if rule.kind != "shape":
+            return
+        x = np.asarray(intermediate_result.x, dtype=float)
+        f, g = fun(x)
+        why = rule.met(problem, x, f, g)
+        if why is not None:
+            reason.append(why)
+            raise StopIteration
+
+    objective_rule = rule.kind == "objective"
+    with limit_blas_threads(settings.blas_threads):
+        f0 = fun(x0.copy())[0]
+        history.append(f0)
+        rule.start(problem, x0, f0)
+        res = scipy.optimize.minimize(
+            fun,
+            x0,
+            jac=True,
+            method="L-BFGS-B",
+            callback=callback,
+            options={
+                "maxiter": int(rule.max_iter),
+                "ftol": float(rule.ftol) if objective_rule else 0.0,
+                "gtol": float(rule.gtol) if objective_rule else 0.0,
+                "maxcor": int(settings.max_corrections),
+                "maxls": int(settings.max_line_search),
+            },
+        )
+        x = np.asarray(res.x, dtype=float)
+        f, g = fun(x)
+    if reason:
+        converged, message = True, reason[0]
+    else:
+        message = str(res.message)
+        converged = bool(res.success) and objective_rule
+        if not converged and "ABNORMAL" in message.upper():
+            converged = rule.accepts_stall(problem, x, g)
+    return OptimizationResult(
+        x=x,
+        fun=f,
+        grad=g,
+        n_iter=int(res.nit),
+        n_evals=fun.n_evals,
+        history=history,
+        converged=converged,
+        message=message,
+        shape_changes=list(rule.shape_changes),
+    )
