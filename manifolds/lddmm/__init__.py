@@ -9,7 +9,9 @@
 - :mod:`.registration`: the registration objective (eq. 3), its exact gradient and
   the driver; :mod:`.registration_problem`: the problem as solvers see it;
   :mod:`.preconditioner`: the optimiser's change of variables;
-- :mod:`.shooting`: Hamiltonian shooting of control points and momenta and its adjoint;
+- :mod:`.hamiltonian_shooting`: Hamiltonian shooting of control points and momenta and
+  its adjoint (:mod:`manifolds.numerics.shooting` is another thing: geodesic shooting
+  for the ``log`` of metric-field spaces);
 - :mod:`.kernels`: Gaussian kernel sums; the kernel object chooses its backend
   (numpy reference or the compiled :mod:`.kernels_numba`);
 - :mod:`.control_points`: control-point policies (dense, grid, auto);
@@ -29,7 +31,7 @@ from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
 from .registration_problem import RegistrationProblem
 from .settings import RegistrationSettings
-from .shooting import ShootingResult, flow, hamiltonian, shoot, shooting_vjp
+from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
 from .stationary_flow import (
     FlowResult,
@@ -63,7 +65,6 @@ __all__ = [
     "register",
     "registration_objective",
     "ShootingResult",
-    "flow",
     "hamiltonian",
     "shoot",
     "shooting_vjp",

@@ -6,7 +6,7 @@ momenta ``mu`` (and, optionally, the control points ``c``) (paper, eq. 3)::
     C(c, mu) = D(phi_1(T)) + alpha^2 || v_0 ||_H^2,
     || v_0 ||_H^2 = sum_ij K(c_i, c_j) mu_i . mu_j,
 
-where ``phi_1`` is the discrete flow of :mod:`manifolds.lddmm.shooting` and ``D`` a
+where ``phi_1`` is the discrete flow of :mod:`manifolds.lddmm.hamiltonian_shooting` and ``D`` a
 data term (:mod:`manifolds.data_terms`): for shapes in correspondence, the squared
 distance ``|| S - phi_1(T) ||_2^2`` of the paper. The gradient is exact for the
 discretised objective: the data term's gradient is back-propagated through the
@@ -36,7 +36,7 @@ from .kernels import GaussianKernel
 from .preconditioner import make_preconditioner
 from .registration_problem import RegistrationProblem, is_dense
 from .settings import RegistrationSettings
-from .shooting import shoot, shooting_vjp
+from .hamiltonian_shooting import shoot, shooting_vjp
 
 __all__ = [
     "RegistrationResult",

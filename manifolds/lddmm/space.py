@@ -17,7 +17,7 @@ from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register
-from .shooting import shoot
+from .hamiltonian_shooting import shoot
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]

@@ -28,7 +28,6 @@ __all__ = [
     "hamiltonian",
     "hamiltonian_system",
     "shoot",
-    "flow",
     "shooting_vjp",
 ]
 
@@ -155,18 +154,6 @@ def shoot(
         n_steps=int(n_steps),
         initial_velocity=first[0][0],
     )
-
-
-def flow(
-    kernel: GaussianKernel,
-    points,
-    control_points,
-    momenta,
-    integrator: str | Integrator = "rk2",
-    n_steps: int = 10,
-) -> np.ndarray:
-    """``phi_1(points)`` for the geodesic shot from ``(control_points, momenta)``."""
-    return shoot(kernel, control_points, momenta, integrator, n_steps, points=points).points
 
 
 def shooting_vjp(
