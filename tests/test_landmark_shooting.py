@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from manifolds.lddmm.kernels import GaussianKernel
 from manifolds.lddmm.hamiltonian_shooting import hamiltonian, shoot, shooting_vjp
+from manifolds.lddmm.kernels import GaussianKernel
 from manifolds.numerics.integrators import RK4, get_integrator
 
 SIGMA = 0.8

@@ -26,12 +26,12 @@
 """
 
 from .control_points import POLICIES, grid_control_points, resolve_control_points
+from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_vjp
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
 from .registration_problem import RegistrationProblem
 from .settings import RegistrationSettings
-from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_vjp
 from .space import LDDMMLandmarks
 from .stationary_flow import (
     FlowResult,

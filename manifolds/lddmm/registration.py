@@ -32,11 +32,11 @@ from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
 from ..numerics.solvers import StoppingRule, get_solver
 from .control_points import resolve_control_points
+from .hamiltonian_shooting import shoot, shooting_vjp
 from .kernels import GaussianKernel
 from .preconditioner import make_preconditioner
 from .registration_problem import RegistrationProblem, is_dense
 from .settings import RegistrationSettings
-from .hamiltonian_shooting import shoot, shooting_vjp
 
 __all__ = [
     "RegistrationResult",

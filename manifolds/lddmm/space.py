@@ -15,9 +15,9 @@ import numpy as np
 
 from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
+from .hamiltonian_shooting import shoot
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register
-from .hamiltonian_shooting import shoot
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]
