@@ -26,7 +26,7 @@
 """
 
 from .control_points import POLICIES, grid_control_points, resolve_control_points
-from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_vjp
+from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_jvp, shooting_vjp
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
@@ -38,6 +38,7 @@ from .stationary_flow import (
     StationaryFlow,
     integrate_stationary,
     kernel_flow,
+    kernel_flow_jvp,
     kernel_flow_vjp,
     kernel_velocity,
 )
@@ -68,6 +69,7 @@ __all__ = [
     "hamiltonian",
     "shoot",
     "shooting_vjp",
+    "shooting_jvp",
     "POLICIES",
     "grid_control_points",
     "resolve_control_points",
@@ -78,6 +80,7 @@ __all__ = [
     "integrate_stationary",
     "kernel_flow",
     "kernel_flow_vjp",
+    "kernel_flow_jvp",
     "register_svf",
     "svf_objective",
     "Composition",

@@ -29,6 +29,7 @@ __all__ = [
     "hamiltonian_system",
     "shoot",
     "shooting_vjp",
+    "shooting_jvp",
 ]
 
 
@@ -38,12 +39,13 @@ def hamiltonian(kernel: GaussianKernel, control_points, momenta) -> float:
 
 
 def hamiltonian_system(kernel: GaussianKernel):
-    """Right-hand side and its vector-Jacobian product for the state ``(c, mu[, x])``.
+    """Right-hand side and its derivatives for the state ``(c, mu[, x])``.
 
     Returns
     -------
     rhs : callable ``state -> dstate``
     rhs_vjp : callable ``(state, cotangent) -> gradient`` (same tuple layout)
+    rhs_jvp : callable ``(state, tangent) -> tangent of dstate`` (same tuple layout)
     """
 
     def rhs(state):
@@ -61,7 +63,14 @@ def hamiltonian_system(kernel: GaussianKernel):
         g_x, g_c2, g_mu2 = kernel.convolve_vjp(state[2], c, mu, cot[2])
         return g_c + g_c2, g_mu + g_mu2, g_x
 
-    return rhs, rhs_vjp
+    def rhs_jvp(state, tan):
+        c, mu = state[0], state[1]
+        d_dc, d_dmu = kernel.hamiltonian_jvp(c, mu, tan[0], tan[1])
+        if len(state) == 2:
+            return d_dc, d_dmu
+        return d_dc, d_dmu, kernel.convolve_jvp(state[2], c, mu, tan[2], tan[0], tan[1])
+
+    return rhs, rhs_vjp, rhs_jvp
 
 
 @dataclass
@@ -120,7 +129,7 @@ def shoot(
         Keep the stage states needed by :func:`shooting_vjp`.
     """
     scheme = get_integrator(integrator)
-    base_rhs, _ = hamiltonian_system(kernel)
+    base_rhs, _, _ = hamiltonian_system(kernel)
     first: list = []
 
     def rhs(state):
@@ -177,7 +186,7 @@ def shooting_vjp(
     """
     if result.stages is None:
         raise ValueError("shooting_vjp: shoot must be called with keep_stages=True")
-    _, rhs_vjp = hamiltonian_system(kernel)
+    _, rhs_vjp, _ = hamiltonian_system(kernel)
     zeros = np.zeros_like(result.control_points)
     cot = (
         zeros if cot_control_points is None else np.asarray(cot_control_points, dtype=float),
@@ -192,3 +201,41 @@ def shooting_vjp(
     h = 1.0 / result.n_steps
     grad = result.integrator.backward(rhs_vjp, result.stages, h, cot)
     return grad[0], grad[1], (grad[2] if len(grad) > 2 else None)
+
+
+def shooting_jvp(
+    kernel: GaussianKernel,
+    result: ShootingResult,
+    d_control_points=None,
+    d_momenta=None,
+    d_points=None,
+):
+    """Exact tangent of the final state along a tangent of the initial state.
+
+    Pushes ``(dc_0, dmu_0[, dx_0])`` forward through the discrete scheme used by
+    :func:`shoot` (which must have been called with ``keep_stages=True``): the
+    tangent-linear model of the shooting, one pass costing about one forward
+    shooting.
+
+    Returns
+    -------
+    dc, dmu : arrays, shape ``(n_cp, d)``
+        Tangents of ``c(1)`` and ``mu(1)``.
+    dx : array, shape ``(k, d)``, or None
+        Tangent of ``phi_1(x)`` (when points were flowed).
+    """
+    if result.stages is None:
+        raise ValueError("shooting_jvp: shoot must be called with keep_stages=True")
+    _, _, rhs_jvp = hamiltonian_system(kernel)
+    zeros = np.zeros_like(result.control_points)
+    tan = (
+        zeros if d_control_points is None else np.asarray(d_control_points, dtype=float),
+        zeros if d_momenta is None else np.asarray(d_momenta, dtype=float),
+    )
+    if result.points is not None:
+        tan += (
+            np.zeros_like(result.points) if d_points is None else np.asarray(d_points, dtype=float),
+        )
+    h = 1.0 / result.n_steps
+    out = result.integrator.forward(rhs_jvp, result.stages, h, tan)
+    return out[0], out[1], (out[2] if len(out) > 2 else None)

@@ -9,7 +9,9 @@ Hamiltonian shooting and its adjoint are
 * :meth:`GaussianKernel.convolve` -- ``v(x_i) = sum_j K(x_i, c_j) mu_j``;
 * :meth:`GaussianKernel.hamiltonian_rhs` -- ``(dc/dt, dmu/dt)`` of eq. (2);
 * :meth:`GaussianKernel.convolve_vjp` and :meth:`GaussianKernel.hamiltonian_vjp`,
-  their vector-Jacobian products (the building blocks of the adjoint pass).
+  their vector-Jacobian products (the building blocks of the adjoint pass);
+* :meth:`GaussianKernel.convolve_jvp` and :meth:`GaussianKernel.hamiltonian_jvp`,
+  their Jacobian-vector products (the tangent-linear pass).
 
 A compiled backend (:mod:`manifolds.lddmm.kernels_numba`; ``numba`` is a dependency)
 computes the same sums with fused loops and no ``k x n`` temporaries; the
@@ -77,10 +79,12 @@ class GaussianKernel:
             backend = "numba" if numba_available() else "numpy"
         self.backend = backend
         self._nb = None
+        self._nb_jvp = None
         if backend == "numba":
-            from . import kernels_numba
+            from . import kernels_numba, kernels_numba_jvp
 
             self._nb = kernels_numba
+            self._nb_jvp = kernels_numba_jvp
 
     def __repr__(self) -> str:
         return f"GaussianKernel(sigma={self.sigma:g}, backend={self.backend!r})"
@@ -246,3 +250,57 @@ class GaussianKernel:
             g_c[rows] = cr * r.sum(1)[:, None] - r @ c + br * w.sum(1)[:, None] - w @ cot_mu
         g_c *= s
         return g_c, g_mu
+
+    # ------------------------------------------------------------ tangent-linear sums
+    def convolve_jvp(self, x, c, mom, dx, dc, dmom):
+        """Jacobian-vector product of :meth:`convolve` along ``(dx, dc, dmom)``.
+
+        ``dv_i = sum_j K_ij [dmom_j - (2/s^2) ((x_i - c_j) . (dx_i - dc_j)) mom_j]``,
+        shape ``(len(x), d)``.
+        """
+        if self._nb_jvp is not None:
+            return self._nb_jvp.convolve_jvp(x, c, mom, dx, dc, dmom, self.inv_s2)
+        out = np.empty((x.shape[0], mom.shape[1]))
+        x2, c2 = (x * x).sum(1), (c * c).sum(1)
+        dxc = (dc * c).sum(1)
+        for rows in self._blocks(x.shape[0], c.shape[0]):
+            kb = _sqdist(x[rows], c, x2[rows], c2)
+            kb *= -self.inv_s2
+            np.exp(kb, out=kb)
+            # (x_i - c_j) . (dx_i - dc_j) = x_i.dx_i - x_i.dc_j - c_j.dx_i + c_j.dc_j
+            xr, dxr = x[rows], dx[rows]
+            de = (xr * dxr).sum(1)[:, None] - xr @ dc.T - dxr @ c.T + dxc[None, :]
+            out[rows] = kb @ dmom - 2.0 * self.inv_s2 * ((kb * de) @ mom)
+        return out
+
+    def hamiltonian_jvp(self, c, mu, dc, dmu):
+        """Jacobian-vector product of :meth:`hamiltonian_rhs` along ``(dc, dmu)``.
+
+        Returns the tangents ``(d(dc/dt), d(dmu/dt))``, each ``(n, d)``. With
+        ``D_ij = c_i - c_j``, ``E_ij = dc_i - dc_j``, ``dK_ij = -(2/s^2) K_ij D_ij . E_ij``::
+
+            d(dc/dt)_i  = sum_j K_ij dmu_j + dK_ij mu_j,
+            d(dmu/dt)_i = (2/s^2) sum_j [(dmu_i . mu_j + mu_i . dmu_j) K_ij + (mu_i . mu_j) dK_ij] D_ij
+                                       + (mu_i . mu_j) K_ij E_ij.
+        """
+        if self._nb_jvp is not None:
+            return self._nb_jvp.hamiltonian_jvp(c, mu, dc, dmu, self.inv_s2)
+        n = c.shape[0]
+        s = 2.0 * self.inv_s2
+        out_c = np.empty_like(mu)
+        out_mu = np.empty_like(mu)
+        c2 = (c * c).sum(1)
+        cdc = (c * dc).sum(1)
+        for rows in self._blocks(n, n):
+            cr, dcr, mr, dmr = c[rows], dc[rows], mu[rows], dmu[rows]
+            kb = _sqdist(cr, c, c2[rows], c2)
+            kb *= -self.inv_s2
+            np.exp(kb, out=kb)
+            de = cdc[rows][:, None] - cr @ dc.T - dcr @ c.T + cdc[None, :]
+            dk = -s * kb * de
+            out_c[rows] = kb @ dmu + dk @ mu
+            mm = mr @ mu.T
+            g = (dmr @ mu.T + mr @ dmu.T) * kb + mm * dk
+            h = mm * kb
+            out_mu[rows] = s * (cr * g.sum(1)[:, None] - g @ c + dcr * h.sum(1)[:, None] - h @ dc)
+        return out_c, out_mu

@@ -11,7 +11,12 @@ back-propagates a cotangent exactly through one discrete step given the stage
 states saved by :meth:`step`:
 
     kbar_s = h b[s] ybar' + h sum_{q>s} a[q][s] Ybar_q,   Ybar_s = (df(Y_s))^T kbar_s,
-    ybar = ybar' + sum_s Ybar_s.
+    ybar = ybar' + sum_s Ybar_s,
+
+and :meth:`step_jvp` pushes a tangent forward through the same step (the
+tangent-linear model of the discrete scheme):
+
+    dY_s = dy + h sum_{r<s} a[s][r] dk_r,   dk_s = df(Y_s) dY_s,   dy' = dy + h sum_s b[s] dk_s.
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ __all__ = ["Integrator", "Euler", "RK2", "RK4", "get_integrator", "INTEGRATORS"]
 State = tuple[np.ndarray, ...]
 Rhs = Callable[[State], State]
 RhsVjp = Callable[[State, State], State]
+RhsJvp = Callable[[State, State], State]
 
 
 def _axpy(y: State, coefs: Sequence[tuple[float, State]]) -> State:
@@ -93,6 +99,15 @@ class Integrator:
                 ybar[i] += g
         return tuple(ybar)
 
+    def step_jvp(self, rhs_jvp: RhsJvp, stages: list[State], h: float, tangent: State) -> State:
+        """Push the tangent ``dy`` of ``y`` forward to the tangent of ``y'`` (exact)."""
+        dks: list[State] = []
+        for s in range(self.n_stages):
+            coefs = [(h * a, dks[r]) for r, a in enumerate(self.a[s]) if a != 0.0]
+            dys = tangent if not coefs else _axpy(tangent, coefs)
+            dks.append(rhs_jvp(stages[s], dys))
+        return _axpy(tangent, [(h * b, dks[s]) for s, b in enumerate(self.b) if b != 0.0])
+
     def integrate(
         self,
         rhs: Rhs,
@@ -137,6 +152,12 @@ class Integrator:
         for stages in reversed(all_stages):
             cot = self.step_vjp(rhs_vjp, stages, h, cot)
         return cot
+
+    def forward(self, rhs_jvp: RhsJvp, all_stages: list[list[State]], h: float, tangent: State):
+        """Push a tangent of ``y0`` through all steps to the tangent of the final state."""
+        for stages in all_stages:
+            tangent = self.step_jvp(rhs_jvp, stages, h, tangent)
+        return tangent
 
 
 Euler = Integrator("euler", a=((),), b=(1.0,), order=1)
