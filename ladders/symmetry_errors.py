@@ -124,7 +124,9 @@ class SymmetryErrors:
         return {k: np.asarray(v).tolist() for k, v in asdict(self).items() if k != "points"}
 
 
-def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -> SymmetryErrors:
+def symmetry_errors(
+    space, template, shape, other, distance: Distance = "rms", warm_start: bool = False
+) -> SymmetryErrors:
     """All four errors of Section 3, sharing intermediate results.
 
     Parameters
@@ -136,6 +138,13 @@ def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -
     distance : {"rms", "frobenius", "mean"} or callable, default "rms"
         Per-vertex RMS distance (the paper's unit), Frobenius norm, mean
         per-vertex distance, or a function ``(a, b) -> float``.
+    warm_start : bool, default False
+        Compute ``Log_M(s_M(S'))`` (involutivity) from its symmetric counterpart
+        ``-Log_M(S')`` (:meth:`manifolds.Connection.symmetry_near`) instead of the
+        space's cold start. Exact where ``log`` is (closed forms: no effect); for an
+        iterative ``log`` it saves iterations, and the result is the minimiser the
+        solver reaches from that start (``docs/study.md`` measures when the cold
+        and warm errors agree).
 
     Returns
     -------
@@ -149,10 +158,14 @@ def symmetry_errors(space, template, shape, other, distance: Distance = "rms") -
     m_from_shape = space.midpoint(shape, template)
     s_m_other = space.symmetry(m, other)
     ladder = space.symmetry(template, s_m_other)  # the transvection s_T o s_M at S' (pole ladder)
+    if warm_start:
+        twice = space.symmetry_near(m, s_m_other, -space.log(m, other))
+    else:
+        twice = space.symmetry(m, s_m_other)
     return SymmetryErrors(
         midpoint_distance=d(m, m_from_shape),
         centrality=d(space.symmetry(m, template), shape),
-        involutivity=d(space.symmetry(m, s_m_other), other),
+        involutivity=d(twice, other),
         transvectivity=d(ladder, space.transvection(m, shape)(other)),
         points={"midpoint": m, "reflected": s_m_other, "pole_ladder": ladder},
     )

@@ -165,6 +165,24 @@ class Connection(ABC):
         """Geodesic symmetry ``s_center(point) = Exp_center(-Log_center(point))``."""
         return self.exp(center, -self.log(center, point))
 
+    def log_near(self, point, other, start):
+        """``Log_point(other)`` computed from the guess ``start``, a tangent at ``point``.
+
+        A space whose ``log`` is an iterative solve (a registration, a shooting)
+        uses ``start`` as the solver's initial value; the default ignores it and
+        calls :meth:`log`. Generic algorithms pass a guess they know to be close
+        (e.g. a symmetric counterpart, ``-Log_M(S')`` for ``Log_M(s_M(S'))``).
+        """
+        return self.log(point, other)
+
+    def symmetry_near(self, center, point, start):
+        """``s_center(point)`` with ``Log_center(point)`` computed from the guess ``start``.
+
+        The default is :meth:`symmetry` (closed forms keep theirs); spaces with an
+        iterative ``log`` return ``Exp_center(-log_near(center, point, start))``.
+        """
+        return self.symmetry(center, point)
+
     def transvection(self, m, a) -> Callable:
         """Transvection ``s_m o s_a`` as a callable on points.
 

@@ -138,6 +138,23 @@ class ResidualAugmented(Connection):
             residual = np.zeros_like(residual)
         return ResidualTangent(tangent, residual)
 
+    def log_near(self, point, other, start) -> ResidualTangent:
+        """``Log_T(S)`` with the wrapped space's ``log`` started from ``start``'s tangent part.
+
+        The residual is that of the warm-started ``log`` (zero if residuals are off).
+        """
+        other = check_array(other, self.point_shape, f"{self.name}: other")
+        guess = self._as_tangent(start, "start").tangent
+        tangent = self.base.log_near(point, other, guess)
+        if not self.use_residuals:
+            return ResidualTangent(tangent, np.zeros(self.point_shape))
+        residual = np.asarray(other, dtype=float) - self.base.exp(point, tangent)
+        return ResidualTangent(tangent, residual)
+
+    def symmetry_near(self, center, point, start):
+        """``s_M(S) = Exp_M(-Log_M S) - delta`` (eq. 6) with ``Log_M`` started from ``start``."""
+        return self.exp(center, -self.log_near(center, point, start))
+
     def log_with_residual(self, point, other):
         """Tangent of the wrapped space and the residual, from a single ``log``."""
         hook = getattr(self.base, "log_with_residual", None)

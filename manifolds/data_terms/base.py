@@ -48,6 +48,16 @@ class DataTerm(ABC):
         """The residual ``r(x)`` with ``D(x) = ||r(x)||^2`` (least-squares terms only)."""
         raise NotImplementedError(f"{type(self).__name__} is not a least-squares data term")
 
+    def gauss_newton_product(self, points: np.ndarray, displacement: np.ndarray) -> np.ndarray:
+        """Gauss-Newton Hessian of ``D`` at ``points`` applied to a ``displacement`` ``(k, d)``.
+
+        For a least-squares term ``2 J_r^T J_r displacement`` with ``J_r`` the
+        residual's Jacobian (positive semi-definite); the Gauss-Newton solvers use it.
+        """
+        raise NotImplementedError(
+            f"{type(self).__name__} has no Gauss-Newton Hessian (not a least-squares data term)"
+        )
+
     def distance(self, points: np.ndarray) -> float:
         """``sqrt(D(x))``: the distance the term measures, in its own unit."""
         return float(np.sqrt(max(self.value(points), 0.0)))

@@ -48,6 +48,10 @@ class SquaredDistance(DataTerm):
         resid = self.residual(points)
         return float((resid * resid).sum())
 
+    def gauss_newton_product(self, points, displacement):
+        """``2 displacement``: the residual's Jacobian is ``-I``, and ``D`` is quadratic."""
+        return 2.0 * np.asarray(displacement, dtype=float)
+
     def linear_target(self, template):
         """``S - T``: the linearised problem fits the target's displacement."""
         return self.target - np.asarray(template, dtype=float)

@@ -320,6 +320,17 @@ class KernelLandmarkSpace(Connection):
         res = self.register(point, other)
         return self._tangent(res.control_points, res.momenta)
 
+    def log_near(self, point, other, start):
+        """``Log_T(S)`` registered from the momenta ``start`` (a warm start, see :meth:`register`)."""
+        point = self.check_point(point, "point")
+        other = self.check_point(other, "other")
+        res = self.register(point, other, initial_momenta=start)
+        return self._tangent(res.control_points, res.momenta)
+
+    def symmetry_near(self, center, point, start):
+        """``s_M(P) = Exp_M(-Log_M(P))`` with the registration started from ``start``."""
+        return self.exp(center, -self.log_near(center, point, start))
+
     def log_with_residual(self, point, other):
         """``(Log_T(S), delta)`` with ``delta = S - Exp_T(Log_T S)`` (eq. 4), one registration."""
         point = self.check_point(point, "point")

@@ -32,9 +32,9 @@ from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
 from ..numerics.solvers import StoppingRule, get_solver
 from .control_points import resolve_control_points
-from .hamiltonian_shooting import shoot, shooting_vjp
+from .flow_models import FlowModel, HamiltonianFlow
 from .kernels import GaussianKernel
-from .preconditioner import make_preconditioner
+from .preconditioner import IdentityPreconditioner, make_preconditioner
 from .registration_problem import RegistrationProblem, is_dense
 from .settings import RegistrationSettings
 
@@ -42,6 +42,7 @@ __all__ = [
     "RegistrationResult",
     "as_data_term",
     "registration_objective",
+    "model_objective",
     "register",
     "run_registration",
 ]
@@ -129,7 +130,7 @@ def registration_objective(
     with_gradient: bool = True,
     control_points_gradient: bool = False,
 ):
-    """Objective ``C(c, mu)`` of eq. (3) and its exact gradient.
+    """Objective ``C(c, mu)`` of eq. (3) and its exact gradient (LDDMM shooting).
 
     When the control points are the template's vertices (and
     ``control_points_gradient`` is False) the template is carried as the
@@ -153,34 +154,47 @@ def registration_objective(
     deformed : array, shape ``(k, d)``, ``phi_1(T)``
     rkhs_sq : float, ``||v_0||_H^2``
     """
-    data_term = as_data_term(target)
-    dense = not control_points_gradient and is_dense(template, control_points)
-    res = shoot(
-        kernel,
-        control_points,
-        momenta,
-        integrator,
-        n_steps,
-        points=None if dense else template,
-        keep_stages=with_gradient,
+    return model_objective(
+        HamiltonianFlow(kernel, integrator, n_steps),
+        template, target, control_points, momenta, alpha, with_gradient,
+        control_points_gradient,
+    )  # fmt: skip
+
+
+def model_objective(
+    model: FlowModel,
+    template,
+    target,
+    control_points,
+    momenta,
+    alpha: float,
+    with_gradient: bool = True,
+    control_points_gradient: bool = False,
+):
+    """Objective of eq. (3) for the deformation ``model`` and its exact gradient.
+
+    Returns ``(value, gradient, deformed, norm_sq)`` as :func:`registration_objective`.
+    """
+    template = np.asarray(template, dtype=float)
+    cp = np.asarray(control_points, dtype=float)
+    settings = RegistrationSettings(
+        sigma=model.kernel.sigma, optimize_control_points=bool(control_points_gradient)
     )
-    deformed = res.control_points if dense else res.points
-    rkhs_sq = float((momenta * res.initial_velocity).sum())
+    problem = RegistrationProblem(
+        model, template, as_data_term(target), alpha, settings, IdentityPreconditioner(),
+        dense=not control_points_gradient and is_dense(template, cp),
+    )  # fmt: skip
+    problem.control_points = cp
+    x = problem.variables(np.asarray(momenta, dtype=float), cp)
+    ev = problem.evaluate(x, with_gradient=with_gradient)
+    flow = ev.flow_pass
     if not with_gradient:
-        return data_term.value(deformed) + alpha**2 * rkhs_sq, None, deformed, rkhs_sq
-    data_value, cot = data_term.value_and_gradient(deformed)
-    value = data_value + alpha**2 * rkhs_sq
-    if dense:
-        g_c, g_mu, _ = shooting_vjp(kernel, res, cot_control_points=cot)
+        grad = None
+    elif control_points_gradient:
+        grad = (ev.grad_c, ev.grad_mu)
     else:
-        g_c, g_mu, _ = shooting_vjp(kernel, res, cot_points=cot)
-    g_mu += 2.0 * alpha**2 * res.initial_velocity
-    if not control_points_gradient:
-        return value, g_mu, deformed, rkhs_sq
-    # <mu, K mu> = 2 H(c, mu) and dmu/dt = -dH/dc: its gradient is -2 dmu/dt(0).
-    _, dmu0 = kernel.hamiltonian_rhs(np.asarray(control_points, dtype=float), momenta)
-    g_c -= 2.0 * alpha**2 * dmu0
-    return value, (g_c, g_mu), deformed, rkhs_sq
+        grad = ev.grad_mu
+    return ev.value, grad, flow.deformed, flow.norm_sq
 
 
 def register(
@@ -218,8 +232,7 @@ def register(
         Emit a :class:`ConvergenceWarning` when the stopping rule was not met.
     """
     return run_registration(
-        registration_objective,
-        "LDDMM",
+        HamiltonianFlow,
         template,
         target,
         alpha,
@@ -228,7 +241,6 @@ def register(
         initial_momenta=initial_momenta,
         kernel=kernel,
         warn=warn,
-        default_integrator="euler",
     )
 
 
@@ -249,8 +261,7 @@ def _check_settings(settings, kernel, label):
 
 
 def run_registration(
-    objective,
-    label: str,
+    model_class: type[FlowModel],
     template,
     target,
     alpha: float,
@@ -260,13 +271,15 @@ def run_registration(
     initial_momenta=None,
     kernel: GaussianKernel | None = None,
     warn: bool = True,
-    default_integrator: str = "euler",
 ) -> RegistrationResult:
     """The driver shared by the LDDMM and SVF registrations.
 
-    ``objective`` has the signature of :func:`registration_objective`; ``label``
-    names the model in messages. The other parameters are those of :func:`register`.
+    ``model_class`` is the deformation model (:class:`HamiltonianFlow`,
+    :class:`StationaryKernelFlow`); its ``default_integrator`` is used when the
+    settings leave the integrator to None. The other parameters are those of
+    :func:`register`.
     """
+    label = model_class.label
     kernel = _check_settings(settings, kernel, label)
     template = np.asarray(template, dtype=float)
     data_term = as_data_term(target)
@@ -279,19 +292,18 @@ def run_registration(
             settings.max_control_points,
         )
     cp = np.asarray(control_points, dtype=float)
+    dense = is_dense(template, cp)
     alpha = float(alpha)
     pre = make_preconditioner(
-        kernel, template, cp, alpha, is_dense(template, cp), settings.precondition,
-        settings.rel_ridge,
-    )  # fmt: skip
+        kernel, template, cp, alpha, dense, settings.precondition, settings.rel_ridge
+    )
     if initial_momenta is not None:
         mu0 = np.asarray(initial_momenta, dtype=float).reshape(cp.shape)
     else:
         mu0 = pre.linearised_start(kernel, template, data_term.linear_target(template), cp)
-    problem = RegistrationProblem(
-        objective, kernel, template, data_term, alpha,
-        settings.integrator or default_integrator, settings, pre,
-    )  # fmt: skip
+    model = model_class(kernel, settings.integrator or model_class.default_integrator,
+                        settings.n_steps)  # fmt: skip
+    problem = RegistrationProblem(model, template, data_term, alpha, settings, pre, dense)
     x0 = problem.start(mu0, cp)
     opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
     result = problem.result(opt)

@@ -80,6 +80,12 @@ class RegistrationSettings:
         Memory of the quasi-Newton solvers (correction pairs).
     max_line_search : int
         Function evaluations per line search.
+    max_inner : int
+        Inner (conjugate-gradient) iterations per step of the Newton-type solvers.
+    refresh_every : int
+        With optimised control points, rebuild the joint preconditioner
+        (:mod:`manifolds.lddmm.joint_preconditioner`) every this many iterations
+        (0: never).
     precondition : bool
         Optimise preconditioned momenta (:mod:`manifolds.lddmm.preconditioner`).
     rel_ridge : float
@@ -108,6 +114,8 @@ class RegistrationSettings:
     max_iter: int = 500
     max_corrections: int = 100
     max_line_search: int = 30
+    max_inner: int = 50
+    refresh_every: int = 20
     precondition: bool = True
     rel_ridge: float = 1e-2
     kernel_backend: str = "auto"
@@ -148,9 +156,9 @@ class RegistrationSettings:
         put(self, "solver", _check_choice(self.solver, tuple(SOLVERS), "solver"))
         put(self, "stopping", _check_choice(self.stopping, STOPPING_RULES, "stopping"))
         put(self, "kernel_backend", _check_choice(self.kernel_backend, _BACKENDS, "kernel_backend"))
-        for key in ("n_steps", "max_iter", "max_corrections", "max_line_search"):
+        for key in ("n_steps", "max_iter", "max_corrections", "max_line_search", "max_inner"):
             put(self, key, check_int(getattr(self, key), f"{name}: {key}", minimum=1))
-        for key in ("auto_threshold",):
+        for key in ("auto_threshold", "refresh_every"):
             put(self, key, check_int(getattr(self, key), f"{name}: {key}", minimum=0))
         put(
             self,

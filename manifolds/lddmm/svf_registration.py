@@ -20,10 +20,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..numerics.integrators import Integrator
+from .flow_models import StationaryKernelFlow
 from .kernels import GaussianKernel
-from .registration import RegistrationResult, as_data_term, run_registration
+from .registration import RegistrationResult, model_objective, run_registration
 from .settings import RegistrationSettings
-from .stationary_flow import kernel_flow, kernel_flow_vjp
 
 __all__ = ["svf_objective", "register_svf"]
 
@@ -65,19 +65,8 @@ def svf_objective(
     """
     if control_points_gradient:
         raise ValueError("the SVF registration does not optimise its control points")
-    data_term = as_data_term(target)
-    res = kernel_flow(
-        kernel, control_points, momenta, template, integrator, n_steps, keep_stages=with_gradient
-    )
-    deformed = res.points
-    kv = kernel.convolve(control_points, control_points, momenta)
-    norm_sq = float((momenta * kv).sum())
-    if not with_gradient:
-        return data_term.value(deformed) + alpha**2 * norm_sq, None, deformed, norm_sq
-    data_value, cot = data_term.value_and_gradient(deformed)
-    _, g_m, _ = kernel_flow_vjp(kernel, control_points, momenta, res, cot)
-    g_m += 2.0 * alpha**2 * kv
-    return data_value + alpha**2 * norm_sq, g_m, deformed, norm_sq
+    model = StationaryKernelFlow(kernel, integrator, n_steps)
+    return model_objective(model, template, target, control_points, momenta, alpha, with_gradient)
 
 
 def register_svf(
@@ -105,8 +94,7 @@ def register_svf(
             "control points fixed"
         )
     return run_registration(
-        svf_objective,
-        "SVF",
+        StationaryKernelFlow,
         template,
         target,
         alpha,
@@ -115,5 +103,4 @@ def register_svf(
         initial_momenta=initial_momenta,
         kernel=kernel,
         warn=warn,
-        default_integrator="rk4",
     )

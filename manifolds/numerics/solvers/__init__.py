@@ -5,6 +5,8 @@
 - :mod:`.stopping`: :class:`StoppingRule` (in the objective's digits, or in the
   shapes' unit);
 - :mod:`.lbfgsb`: scipy's L-BFGS-B (``"lbfgsb"``);
+- :mod:`.gauss_newton`: trust-region Gauss-Newton with matrix-free Steihaug-Toint CG
+  (``"gauss-newton"``), for least-squares data terms;
 - :mod:`.blas`: BLAS thread limits during a run.
 
 :data:`SOLVERS` maps a name (``RegistrationSettings.solver``) to a function
@@ -12,12 +14,13 @@
 """
 
 from .blas import limit_blas_threads
+from .gauss_newton import minimize_gauss_newton, steihaug_cg
 from .lbfgsb import minimize_lbfgsb
 from .result import OptimizationResult, SolverProblem
 from .stopping import StoppingRule
 
 #: Solver name -> ``(problem, x0, settings) -> OptimizationResult``.
-SOLVERS = {"lbfgsb": minimize_lbfgsb}
+SOLVERS = {"lbfgsb": minimize_lbfgsb, "gauss-newton": minimize_gauss_newton}
 
 
 def get_solver(name: str):
@@ -37,5 +40,7 @@ __all__ = [
     "SolverProblem",
     "StoppingRule",
     "minimize_lbfgsb",
+    "minimize_gauss_newton",
+    "steihaug_cg",
     "limit_blas_threads",
 ]

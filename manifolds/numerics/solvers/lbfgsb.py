@@ -68,25 +68,37 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
             raise StopIteration
 
     objective_rule = rule.kind == "objective"
+    # A problem whose metric depends on the iterate (``refreshable``) is restarted
+    # every ``refresh_every`` iterations in refreshed variables.
+    every = int(settings.refresh_every) if getattr(problem, "refreshable", False) else 0
+    n_iter = 0
     with limit_blas_threads(settings.blas_threads):
         f0 = fun(x0.copy())[0]
         history.append(f0)
         rule.start(problem, x0, f0)
-        res = scipy.optimize.minimize(
-            fun,
-            x0,
-            jac=True,
-            method="L-BFGS-B",
-            callback=callback,
-            options={
-                "maxiter": int(rule.max_iter),
-                "ftol": float(rule.ftol) if objective_rule else 0.0,
-                "gtol": float(rule.gtol) if objective_rule else 0.0,
-                "maxcor": int(settings.max_corrections),
-                "maxls": int(settings.max_line_search),
-            },
-        )
-        x = np.asarray(res.x, dtype=float)
+        x = x0
+        while True:
+            budget = rule.max_iter - n_iter
+            res = scipy.optimize.minimize(
+                fun,
+                x,
+                jac=True,
+                method="L-BFGS-B",
+                callback=callback,
+                options={
+                    "maxiter": int(min(budget, every) if every > 0 else budget),
+                    "ftol": float(rule.ftol) if objective_rule else 0.0,
+                    "gtol": float(rule.gtol) if objective_rule else 0.0,
+                    "maxcor": int(settings.max_corrections),
+                    "maxls": int(settings.max_line_search),
+                },
+            )
+            n_iter += int(res.nit)
+            x = np.asarray(res.x, dtype=float)
+            restart = every > 0 and res.nit >= every and not reason and n_iter < rule.max_iter
+            if not restart:
+                break
+            x = problem.refresh(x)  # the same iterate in the refreshed variables
         f, g = fun(x)
     if reason:
         converged, message = True, reason[0]
@@ -99,7 +111,7 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
         x=x,
         fun=f,
         grad=g,
-        n_iter=int(res.nit),
+        n_iter=n_iter,
         n_evals=fun.n_evals,
         history=history,
         converged=converged,
