@@ -149,8 +149,8 @@ def test_inverse_consistency_units():
 
 
 def test_study_runs_with_optimised_control_points_and_reports_in_the_chosen_unit():
-    from ladders.study.pipeline import StudyConfig, run_subject
-    from ladders.study.synthetic_lv import make_synthetic_cohort
+    from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+    from ladders.study.running.pipeline import StudyConfig, run_subject
 
     cohort = make_synthetic_cohort(n_subjects=1, n_vertices=241, seed=0)
     args = (cohort.atlas, cohort.faces, cohort.subjects[0])

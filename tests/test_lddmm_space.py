@@ -146,7 +146,7 @@ def test_finegrid_policy_halves_the_spacing():
 
 
 def test_study_preflight_budget_covers_the_finer_grid():
-    from ladders.study.cli_types import check_grid_sigma
+    from ladders.study.cli.cli_types import check_grid_sigma
 
     shape = np.random.default_rng(0).uniform(0.0, 100.0, (50, 3))  # a 100 mm box
     check_grid_sigma(shape, 5.0, "grid")  # 21^3 = 9,261 points: within the budget

@@ -8,15 +8,15 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import main
-from ladders.study.cohort_table import read_cohort_table
-from ladders.study.mesh_io import (
+from ladders.study.cohort import (
     MeshFolderError,
     UnusedMeshFilesWarning,
+    make_synthetic_cohort,
     read_cohort,
-    read_mesh,
+    read_cohort_table,
     write_cohort,
 )
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.meshes import read_mesh
 
 from .vtp_writer import vtp_bytes
 

@@ -6,10 +6,10 @@ import pytest
 
 from ladders.study.area_strain import area_strain
 from ladders.study.cohort import MeshFolderError
-from ladders.study.mesh_outputs import write_point_mesh, write_subject_meshes
-from ladders.study.pipeline import StudyConfig, run_subject
-from ladders.study.runner import run_study
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.meshes.mesh_outputs import write_point_mesh, write_subject_meshes
+from ladders.study.running.pipeline import StudyConfig, run_subject
+from ladders.study.running.runner import run_study
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
 CONFIG = StudyConfig.build(alpha2=(1.0,), sigma=20.0, max_iter=15, n_steps=5, fanning_steps=3)

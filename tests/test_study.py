@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import main
-from ladders.study.mesh_io import write_cohort
-from ladders.study.pipeline import ERROR_NAMES, StudyConfig
-from ladders.study.report import summarize, write_report
-from ladders.study.runner import run_study
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort import write_cohort
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.reporting.report import summarize, write_report
+from ladders.study.running.pipeline import ERROR_NAMES, StudyConfig
+from ladders.study.running.runner import run_study
 
 ALPHA2 = (0.01, 1.0, 100.0)
 CONFIG = StudyConfig.build(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
@@ -62,7 +62,7 @@ def test_outputs_are_written_and_readable(study):
 
 
 def test_cli_exit_status_counts_failed_subjects(tmp_path, monkeypatch, capsys):
-    import ladders.study.runner as runner_mod
+    import ladders.study.running.runner as runner_mod
 
     original = runner_mod._one_alpha
 
@@ -178,7 +178,7 @@ def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
 
 
 def test_cli_rejects_mismatched_meshes(tmp_path, capsys):
-    from ladders.study.mesh_io import write_mesh
+    from ladders.study.meshes.mesh_io import write_mesh
 
     meshes = write_cohort(COHORT.head(1), tmp_path / "meshes", ext="ply")
     other = make_synthetic_cohort(1, grid=(6, 4), seed=1)

@@ -6,7 +6,7 @@ import io
 import numpy as np
 import pytest
 
-from ladders.study.statistics import (
+from ladders.study.reporting.statistics import (
     MEASURES,
     paired_comparison,
     paired_csv,
@@ -109,7 +109,7 @@ def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
 
 
 def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
-    from ladders.study.report import convergence_markdown
+    from ladders.study.reporting.report import convergence_markdown
 
     pair = {"n_registrations": 13, "non_converged_registrations": 1, "n_iterations": 260}
     results = [

@@ -11,12 +11,12 @@ import time
 
 import pytest
 
-import ladders.study.runner as runner_mod
+import ladders.study.running.runner as runner_mod
 from ladders.study.cohort import Subject
-from ladders.study.pipeline import StudyConfig
-from ladders.study.runner import configuration_id, run_study
-from ladders.study.store import PairStore, atomic_write_text, validate_subject_name
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.running.pipeline import StudyConfig
+from ladders.study.running.runner import configuration_id, run_study
+from ladders.study.running.store import PairStore, atomic_write_text, validate_subject_name
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
 CFG = StudyConfig.build(alpha2=(100.0,), sigma=20.0, max_iter=15, fanning_steps=2)

@@ -6,9 +6,15 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import build_parser, main
-from ladders.study.cli_types import UsageError
-from ladders.study.pipeline import ERROR_NAMES, VARIANTS, StudyConfig, make_space, run_subject
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cli.cli_types import UsageError
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.running.pipeline import (
+    ERROR_NAMES,
+    VARIANTS,
+    StudyConfig,
+    make_space,
+    run_subject,
+)
 from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(8, 5), seed=0)
@@ -71,7 +77,7 @@ def _fake_results(values: dict[str, float], inverse: float) -> list[dict]:
 
 
 def test_comparison_pairs_subjects_by_name_with_known_answers():
-    from ladders.study.deformation_comparison import (
+    from ladders.study.reporting.deformation_comparison import (
         compare_deformations,
         comparison_csv,
         comparison_markdown,

@@ -192,9 +192,12 @@ def _add_run_arguments(p) -> None:
 
 
 def _load_cohort(args):
-    from .cohort_table import read_cohort_table
-    from .mesh_io import UnusedMeshFilesWarning, read_cohort
-    from .synthetic_lv import make_synthetic_cohort
+    from ..cohort import (
+        UnusedMeshFilesWarning,
+        make_synthetic_cohort,
+        read_cohort,
+        read_cohort_table,
+    )
 
     n = args.subjects
     if args.atlas is not None and args.meshes is None and args.cohort is None:
@@ -255,7 +258,7 @@ def _backend(args):
 
 def _note_pairs_without_meshes(outcome) -> None:
     """Tell which resumed pairs have no mesh files (they were computed with --no-meshes)."""
-    from .mesh_outputs import alpha_folder
+    from ..meshes.mesh_outputs import alpha_folder
 
     root = Path(outcome.output) / "meshes" / outcome.config_id
     bare = [(n, a) for n, a in outcome.skipped if not (root / n / alpha_folder(a)).is_dir()]
@@ -269,7 +272,7 @@ def _note_pairs_without_meshes(outcome) -> None:
 
 def _input_files(args) -> list | None:
     """Files the cohort was read from (hashed into the manifest); ``None`` for the built-in one."""
-    from .runner import mesh_files
+    from ..running.runner import mesh_files
 
     files = []
     if args.meshes is not None:
@@ -282,7 +285,7 @@ def _input_files(args) -> list | None:
 
 
 def _config(args, deformation: str):
-    from .pipeline import StudyConfig
+    from ..running import StudyConfig
 
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
     return StudyConfig.build(
@@ -303,8 +306,8 @@ def _config(args, deformation: str):
 
 def _run_one(args, cohort, description, config, output: Path):
     """Run (or resume) one study into ``output``, write its report, print its summary."""
-    from .report import summarize, summary_markdown, write_report
-    from .runner import run_study
+    from ..reporting import summarize, summary_markdown, write_report
+    from ..running import run_study
 
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "
@@ -342,8 +345,12 @@ def _run_one(args, cohort, description, config, output: Path):
 
 
 def _write_comparison(outcomes: dict, output: Path) -> Path:
-    from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
-    from .store import atomic_write_text
+    from ..reporting.deformation_comparison import (
+        compare_deformations,
+        comparison_csv,
+        comparison_markdown,
+    )
+    from ..running.store import atomic_write_text
 
     rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
     unit = next((p["unit"] for r in outcomes["lddmm"].results for p in r["alpha2"].values()), "mm")

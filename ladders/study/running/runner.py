@@ -14,9 +14,10 @@ import numpy as np
 
 from manifolds.errors import ConvergenceWarning
 
-from .area_strain import area_strain
-from .cohort import CohortError, Subject
-from .mesh_outputs import write_subject_meshes
+from ..area_strain import area_strain
+from ..cohort import Subject
+from ..errors import CohortError
+from ..meshes.mesh_outputs import write_subject_meshes
 from .pipeline import StudyConfig, _one_alpha
 from .provenance import write_manifest
 from .store import (
@@ -102,7 +103,7 @@ def compute_pair(
     """The results of one subject at one ``alpha^2`` (a JSON-ready dict, ``status: "ok"``).
 
     With ``meshes`` (a folder) the pair's shapes and strain maps are written
-    there as ``.vtu`` files (:func:`ladders.study.mesh_outputs.write_subject_meshes`).
+    there as ``.vtu`` files (:func:`ladders.study.meshes.mesh_outputs.write_subject_meshes`).
 
     Registrations stopped by the iteration limit are counted by the space
     itself (``non_converged_registrations``) rather than warned once per call.
@@ -280,7 +281,7 @@ def run_study(
         Names must be plain file names (no path separator, not ``..``).
     output : path
         Results folder; each pair is stored as soon as it finishes (layout:
-        :mod:`ladders.study.store`). Rerunning resumes; extending the alpha^2 sweep
+        :mod:`ladders.study.running.store`). Rerunning resumes; extending the alpha^2 sweep
         computes only the new pairs; other settings go to another folder. A
         pair that raised is stored with its error and retried on the next run.
     jobs : int
@@ -295,7 +296,7 @@ def run_study(
         Mesh files the cohort was read from; their SHA-256 go into the manifest.
     meshes : bool, default True
         Write each computed pair's shapes and strain maps as ``.vtu`` files under
-        ``output/meshes/<config>`` (:mod:`ladders.study.mesh_outputs`).
+        ``output/meshes/<config>`` (:mod:`ladders.study.meshes.mesh_outputs`).
 
     Returns
     -------

@@ -1,15 +1,15 @@
-"""The readers behind :func:`ladders.study.mesh_io.read_mesh`, one per library, and their choice.
+"""The readers behind :func:`ladders.study.meshes.mesh_io.read_mesh`, one per library, and their choice.
 
 Every format is read so that vertex ``i`` of the file is vertex ``i`` of the
 returned array (no merging, no reordering), since a study's meshes are in
 vertex correspondence through their vertex order:
 
 ========  =========================================================================
-``.vtk``  legacy VTK: ``DATASET POLYDATA`` by :func:`ladders.study.vtk_io.read_vtk`
+``.vtk``  legacy VTK: ``DATASET POLYDATA`` by :func:`ladders.study.meshes.vtk_io.read_vtk`
           (meshio 5 does not read polydata), every other dataset (e.g. the
           ``UNSTRUCTURED_GRID`` meshio writes) by meshio
 ``.vtu``  meshio
-``.vtp``  :func:`ladders.study.vtk_xml.read_vtp` (meshio does not read VTK XML PolyData)
+``.vtp``  :func:`ladders.study.meshes.vtk_xml.read_vtp` (meshio does not read VTK XML PolyData)
 ``.ply``  meshio, then trimesh if meshio fails
 ``.off``  meshio, then trimesh if meshio fails
 ``.obj``  trimesh (``process=False, maintain_order=True``), then meshio: meshio 5
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cohort import MeshFolderError
+from ..errors import MeshFolderError
 
 __all__ = ["read_with_meshio", "read_with_trimesh", "merge_soup", "vtk_dataset"]
 

@@ -29,10 +29,10 @@ from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, 
 from manifolds.point_distance import point_distance
 from manifolds.residual import ResidualAugmented
 
-from ..fanning import fanning_transport
-from ..symmetry_errors import symmetry_errors
-from .area_strain import area_strain, area_strain_error
-from .cohort import Subject
+from ...fanning import fanning_transport
+from ...symmetry_errors import symmetry_errors
+from ..area_strain import area_strain, area_strain_error
+from ..cohort import Subject
 
 __all__ = ["StudyConfig", "DEFAULT_REGISTRATION", "run_subject", "VARIANTS", "ERROR_NAMES"]
 
@@ -194,7 +194,7 @@ def run_subject(
         (``s_M(S')``) and ``pole_ladder`` (``T'``) for ``variant`` in
         :data:`VARIANTS`, and ``shapes[alpha2_key]["fanning"]["transported"]``
         the fanning scheme's ``T'``; every array is ``(k, 3)``. These arrays are
-        not JSON-serialisable: :func:`ladders.study.mesh_outputs.write_subject_meshes`
+        not JSON-serialisable: :func:`ladders.study.meshes.mesh_outputs.write_subject_meshes`
         writes them as mesh files and removes them from the result.
     """
     start = time.perf_counter()

@@ -6,7 +6,7 @@ than LDDMM. With both studies run on the same subjects and settings
 (``symladders study --deformation both``), each measure is compared subject by
 subject: ``SVF - LDDMM`` per subject, the fraction of subjects where SVF is
 lower, the median difference with a 95 % bootstrap interval and the Wilcoxon
-signed-rank p-value (:func:`ladders.study.statistics.paired_comparison`).
+signed-rank p-value (:func:`ladders.study.reporting.statistics.paired_comparison`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import io
 
 import numpy as np
 
-from .pipeline import ERROR_NAMES, VARIANTS
+from ..running.pipeline import ERROR_NAMES, VARIANTS
 from .statistics import paired_comparison
 
 __all__ = ["MEASURES", "compare_deformations", "comparison_markdown", "comparison_csv"]
@@ -47,7 +47,7 @@ def compare_deformations(
     Parameters
     ----------
     lddmm, svf : lists of per-subject result dicts
-        :attr:`ladders.study.runner.StudyOutcome.results` of the two studies;
+        :attr:`ladders.study.running.runner.StudyOutcome.results` of the two studies;
         subjects are matched by name, and a subject missing from either (a
         failed pair) is left out of that ``alpha^2``.
     seed : int

@@ -39,12 +39,15 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import meshio
 import numpy as np
 
-from .cohort import MeshFolderError, Subject
-from .pipeline import VARIANTS
+from ..errors import MeshFolderError
+
+if TYPE_CHECKING:
+    from ..cohort import Subject
 
 __all__ = ["MESH_OUTPUT_FORMATS", "write_point_mesh", "write_subject_meshes", "method_names"]
 
@@ -56,6 +59,8 @@ _SHAPE_FILES = {"midpoint": "M", "reflected": "sM_Sprime", "pole_ladder": "Tprim
 
 def method_names() -> dict[str, str]:
     """Transport method name in file names, keyed by the result's variant key."""
+    from ..running.pipeline import VARIANTS
+
     names = {variant: f"pole_ladder_{variant}" for variant in VARIANTS}
     names["fanning"] = "fanning"
     return names
@@ -127,7 +132,7 @@ def write_subject_meshes(
         The atlas ``T``.
     faces : array_like of int, shape (f, 3)
     result : dict
-        The output of :func:`ladders.study.pipeline.run_subject` called with
+        The output of :func:`ladders.study.running.pipeline.run_subject` called with
         ``keep_shapes=True``. Its ``"shapes"`` entry is removed (so the result
         is JSON-ready again); its per-``alpha^2`` ``"las"`` lists give the strains.
     ext : {".vtu", ".vtk"}

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cohort import CohortError
+from ..errors import CohortError
 
 __all__ = [
     "atomic_write_text",

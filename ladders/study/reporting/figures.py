@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .pipeline import ERROR_NAMES, VARIANTS
+from ..running.pipeline import ERROR_NAMES, VARIANTS
 
 __all__ = ["plot_errors", "plot_ase", "plot_maps", "alpha_keys", "collect"]
 

@@ -3,8 +3,9 @@
 A :class:`Cohort` holds what the paper's Section 3 study needs: a population
 atlas ``T`` and, per subject, an end-diastole shape ``S`` and an end-systole
 shape ``S'``, all meshes in vertex correspondence (one shared ``faces`` array).
-Cohorts come from a folder of meshes (:func:`ladders.study.mesh_io.read_cohort`) or
-from the synthetic generator :func:`ladders.study.synthetic_lv.make_synthetic_cohort`.
+Cohorts come from a folder of meshes (:func:`ladders.study.cohort.read_cohort`), a
+table (:func:`ladders.study.cohort.read_cohort_table`) or the synthetic generator
+:func:`ladders.study.cohort.make_synthetic_cohort`.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import CohortError, MeshFolderError
+
 __all__ = [
     "CohortError",
     "MeshFolderError",
@@ -22,20 +25,12 @@ __all__ = [
 ]
 
 
-class CohortError(ValueError):
-    """Inconsistent cohort: shapes, faces or vertex counts do not correspond."""
-
-
-class MeshFolderError(CohortError):
-    """A mesh file or a cohort folder cannot be read or does not correspond."""
-
-
 @dataclass
 class Subject:
     """One subject: end-diastole ``ed`` and end-systole ``es`` vertices, each ``(k, 3)``.
 
     ``parameters`` holds whatever produced the shapes, e.g. the
-    :class:`ladders.study.synthetic_lv.SubjectParameters` of a synthetic subject
+    :class:`ladders.study.cohort.SubjectParameters` of a synthetic subject
     (``None`` for meshes read from files).
     """
 

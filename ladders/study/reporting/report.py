@@ -8,13 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..running.pipeline import ERROR_NAMES, VARIANTS
+from ..running.store import atomic_write_text
 from .figures import LABELS as _LABELS
 from .figures import alpha_keys as _alpha_keys
 from .figures import collect as _collect
 from .figures import plot_ase, plot_errors, plot_maps
-from .pipeline import ERROR_NAMES, VARIANTS
 from .statistics import DEFAULT_UNIT, paired_csv, paired_statistics, tidy_csv, tidy_rows
-from .store import atomic_write_text
 
 __all__ = ["summarize", "summary_markdown", "paired_markdown", "failures_markdown", "write_report"]
 
@@ -166,7 +166,7 @@ def write_report(
 
     Parameters
     ----------
-    results : list of per-subject result dicts (:attr:`ladders.study.runner.StudyOutcome.results`)
+    results : list of per-subject result dicts (:attr:`ladders.study.running.runner.StudyOutcome.results`)
     output : path of the results folder
     atlas : array (k, 3); faces : int array (f, 3)
     map_subject_ed : array (k, 3), optional

@@ -18,13 +18,10 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from .cohort import Cohort, MeshFolderError
-from .mesh_io import (
-    MESH_EXTENSIONS,
-    OTHER_MESH_EXTENSIONS,
-    assemble_cohort,
-    warn_unused,
-)
+from ..errors import MeshFolderError
+from ..meshes.mesh_io import MESH_EXTENSIONS, OTHER_MESH_EXTENSIONS
+from .cohort import Cohort
+from .mesh_folder import assemble_cohort, warn_unused
 
 __all__ = ["read_cohort_table"]
 

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .pipeline import ERROR_NAMES
+from ..running.pipeline import ERROR_NAMES
 
 __all__ = [
     "DEFAULT_UNIT",
@@ -64,7 +64,7 @@ def tidy_rows(results: list[dict], unit: str | None = None) -> list[dict]:
     Parameters
     ----------
     results : list of dict
-        Per-subject results (:attr:`ladders.study.runner.StudyOutcome.results`).
+        Per-subject results (:attr:`ladders.study.running.runner.StudyOutcome.results`).
     unit : str, optional
         Unit of the distances; default: the results' ``unit`` field, else
         :data:`DEFAULT_UNIT`.

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cohort import MeshFolderError
+from ..errors import MeshFolderError
 
 __all__ = ["read_vtk", "write_vtk"]
 
