@@ -1,6 +1,7 @@
 """Tidy per-subject table and the paired comparison residual vs no residual."""
 
 import csv
+import dataclasses
 import io
 
 import numpy as np
@@ -15,28 +16,26 @@ from ladders.study.reporting.statistics import (
     tidy_rows,
 )
 
-
-def _pair(shift: float, unit=None) -> dict:
-    errs = {m: 1.0 + shift for m in ("midpoint_distance", "centrality", "involutivity")}
-    pair = {
-        "residual": {**errs, "transvectivity": 2.0, "ase": 0.1},
-        "no_residual": {**{m: 3.0 + shift for m in errs}, "transvectivity": 2.0, "ase": 0.3},
-        "fanning": {"ase": 0.2},
-        "registration_error": 4.0,
-        "rkhs_norm": 5.0,
-        "inverse_consistency": 0.5,
-        "converged": True,
-    }
-    if unit:
-        pair["unit"] = unit
-    return pair
+from .fake_results import fake_pair, fake_subject
 
 
-def _results(n=3, unit=None):
-    return [
-        {"subject": f"s{i}", "alpha2": {"1.0": _pair(i, unit), "10.0": _pair(-0.5 * i, unit)}}
-        for i in range(n)
-    ]
+def _pair(subject, alpha2, shift: float, unit="mm"):
+    res = (1.0 + shift, 1.0 + shift, 1.0 + shift, 2.0)
+    nores = (3.0 + shift, 3.0 + shift, 3.0 + shift, 2.0)
+    ase = {"pole_ladder_residual": 0.1, "pole_ladder_no_residual": 0.3, "fanning": 0.2}
+    errors = {"residual": res, "no_residual": nores}
+    return fake_pair(subject, alpha2, errors, ase, (4.0, 5.0, 0.5, True), unit=unit)
+
+
+def _results(n=3, unit="mm", drop=None):
+    """Subjects s0.. with results at alpha^2 1 and 10; ``drop`` = (i, alpha2) failed."""
+    out = []
+    for i in range(n):
+        pairs = [_pair(f"s{i}", 1.0, i, unit), _pair(f"s{i}", 10.0, -0.5 * i, unit)]
+        failed = [(p.alpha2, "RuntimeError: x") for p in pairs if (i, p.alpha2) == drop]
+        pairs = [p for p in pairs if (i, p.alpha2) != drop]
+        out.append(fake_subject(f"s{i}", pairs, failed))
+    return out
 
 
 def test_tidy_table_columns_rows_and_units():
@@ -90,8 +89,7 @@ def test_paired_comparison_degenerate_cases():
 
 
 def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
-    results = _results(4)
-    results[3]["alpha2"].pop("10.0")  # failed there
+    results = _results(4, drop=(3, 10.0))  # failed there
     rows = paired_statistics(results, seed=0)
     assert [(r["alpha2"], r["measure"]) for r in rows[:2]] == [
         (1.0, "midpoint_distance"),
@@ -110,13 +108,18 @@ def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
 
 def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
     from ladders.study.reporting.report import convergence_markdown
+    from ladders.study.running import RegistrationCounts
 
-    pair = {"n_registrations": 13, "non_converged_registrations": 1, "n_iterations": 260}
+    def pair(alpha2, gradient):
+        counts = RegistrationCounts(13, 1, 260, 520, gradient)
+        return dataclasses.replace(_pair("s", alpha2, 0.0), counts=counts)
+
     results = [
-        {"alpha2": {"1.0": {**pair, "max_gradient_norm": 2e-8}}},
-        {"alpha2": {"1.0": {**pair, "max_gradient_norm": 5e-7}, "10.0": {**pair}}},
+        fake_subject("s0", [pair(1.0, 2e-8)]),
+        fake_subject("s1", [pair(1.0, 5e-7), pair(10.0, 0.0)]),
     ]
     text = convergence_markdown(results)
     assert "Registrations: 39; 36 (92.31%) met the optimiser's tolerance" in text
     assert "3 stopped at the iteration limit; 20 iterations on average" in text
+    assert "(40 flow passes)" in text
     assert "largest final gradient 5e-07" in text

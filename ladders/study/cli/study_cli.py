@@ -306,8 +306,8 @@ def _config(args, deformation: str):
 
 def _run_one(args, cohort, description, config, output: Path):
     """Run (or resume) one study into ``output``, write its report, print its summary."""
-    from ..reporting import summarize, summary_markdown, write_report
-    from ..running import run_study
+    from ..reporting import summarize, terminal_summary, write_report
+    from ..running import RegistrationCounts, run_study
 
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "
@@ -327,21 +327,39 @@ def _run_one(args, cohort, description, config, output: Path):
             meshes=not args.no_meshes,
             input_files=_input_files(args),
         )
+    _note_recomputed(outcome)
     if outcome.skipped:
         print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
         if not args.no_meshes:
             _note_pairs_without_meshes(outcome)
-    paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, cohort.subjects[0].ed)
-    n_regs = sum(a["n_registrations"] for r in outcome.results for a in r["alpha2"].values())
-    n_bad = sum(r["non_converged_registrations"] for r in outcome.results)
-    print()
-    print(summary_markdown(summarize(outcome.results)))
+    shapes = {s.name: s.ed for s in cohort.subjects}
+    paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, shapes)
+    pairs = [p for r in outcome.results for p in r.pairs]
+    if pairs:
+        print()
+        print(terminal_summary(summarize(outcome.results), pairs[0].unit, len(cohort)))
+    counts = RegistrationCounts.total(p.counts for p in pairs)
     print(
-        f"Registrations: {n_regs}; {n_bad} stopped at the iteration limit (--max-iter "
-        f"{config.registration.max_iter}) before meeting the optimiser's tolerance."
+        f"Registrations: {counts.n_registrations}; {counts.non_converged} stopped at the "
+        f"iteration limit (--max-iter {config.registration.max_iter}) before meeting the "
+        "optimiser's tolerance."
     )
-    print("Files:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
+    if "maps_subject" in paths:
+        print(f"Fig. 5b shows subject {paths.pop('maps_subject')} (median ASE).")
+    print("Full tables and figures:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
     return outcome
+
+
+def _note_recomputed(outcome) -> None:
+    """Say which stored results could not be used and were computed again, and why."""
+    if not outcome.recomputed:
+        return
+    reasons = sorted(set(outcome.recomputed.values()))
+    print(
+        f"note: {len(outcome.recomputed)} stored (subject, alpha^2) result(s) were computed "
+        f"again: {'; '.join(reasons)}",
+        file=sys.stderr,
+    )
 
 
 def _write_comparison(outcomes: dict, output: Path) -> Path:
@@ -353,8 +371,8 @@ def _write_comparison(outcomes: dict, output: Path) -> Path:
     from ..running.store import atomic_write_text
 
     rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
-    unit = next((p["unit"] for r in outcomes["lddmm"].results for p in r["alpha2"].values()), "mm")
-    text = comparison_markdown(rows, unit)
+    units = [p.unit for r in outcomes["lddmm"].results for p in r.pairs]
+    text = comparison_markdown(rows, units[0] if units else "mm")
     atomic_write_text(output / "comparison.csv", comparison_csv(rows))
     atomic_write_text(output / "comparison.md", text)
     print(text)

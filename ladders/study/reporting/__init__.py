@@ -7,12 +7,13 @@
 """
 
 from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
-from .report import summarize, summary_markdown, write_report
+from .report import summarize, summary_markdown, terminal_summary, write_report
 from .statistics import paired_comparison, paired_statistics, tidy_rows
 
 __all__ = [
     "summarize",
     "summary_markdown",
+    "terminal_summary",
     "write_report",
     "paired_comparison",
     "paired_statistics",

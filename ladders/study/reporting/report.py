@@ -8,40 +8,56 @@ from pathlib import Path
 
 import numpy as np
 
-from ..running.pipeline import ERROR_NAMES, VARIANTS
+from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS, RegistrationCounts
 from ..running.store import atomic_write_text
-from .figures import LABELS as _LABELS
-from .figures import alpha_keys as _alpha_keys
-from .figures import collect as _collect
 from .figures import plot_ase, plot_errors, plot_maps
-from .statistics import DEFAULT_UNIT, paired_csv, paired_statistics, tidy_csv, tidy_rows
+from .selection import LABELS, alpha_values, collect, row_label, transport_rows
+from .statistics import paired_csv, paired_statistics, tidy_csv, tidy_rows
 
-__all__ = ["summarize", "summary_markdown", "paired_markdown", "failures_markdown", "write_report"]
+__all__ = [
+    "summarize",
+    "summary_markdown",
+    "terminal_summary",
+    "paired_markdown",
+    "failures_markdown",
+    "convergence_markdown",
+    "write_report",
+]
+
+_REGISTRATION_LABELS = {
+    "registration_error": "Reg. error",
+    "registration_norm": "Reg. norm",
+    "inverse_consistency": "Inverse cons.",
+}
 
 
-def summarize(results: list[dict]) -> list[dict]:
+def summarize(results: list) -> list[dict]:
     """Mean (and standard deviation) of every measure per ``alpha^2`` and variant.
+
+    Parameters
+    ----------
+    results : list of SubjectResults
 
     Returns
     -------
     list of dict
-        One row per ``(alpha2, measure, variant)`` with ``mean``, ``std``, ``n``.
+        One row per ``(alpha2, measure, variant)`` with ``mean``, ``std``, ``n``;
+        ``variant`` is ``"residual"``, ``"no_residual"``, the third transport
+        method (its ASE) or ``"both"`` (the registration measures).
     """
+    if not any(r.pairs for r in results):
+        return []
+    measures = [(name, v, v) for v in VARIANTS for name in (*ERROR_NAMES, "ase")]
+    other = transport_rows(results)[-1]
+    measures += [("ase", other, other)]
+    measures += [(name, VARIANTS[0], "both") for name in REGISTRATION_MEASURES]
     rows = []
-    for key in _alpha_keys(results):
-        measures = [(name, (v, name), v) for v in VARIANTS for name in (*ERROR_NAMES, "ase")]
-        measures += [("ase", ("fanning", "ase"), "fanning")]
-        measures += [
-            (name, (name,), "both")
-            for name in ("registration_error", "rkhs_norm", "inverse_consistency")
-        ]
-        for name, path, variant in measures:
-            vals = _collect(results, key, path)
-            if vals.size == 0:
-                continue  # every subject failed at this alpha^2
+    for a2 in alpha_values(results):
+        for name, row, variant in measures:
+            vals = collect(results, a2, row, name)
             rows.append(
                 {
-                    "alpha2": float(key),
+                    "alpha2": a2,
                     "measure": name,
                     "variant": variant,
                     "mean": float(vals.mean()),
@@ -64,47 +80,42 @@ def _cell(get: dict, key: tuple) -> str:
     return f"{get[key]:.3g}" if key in get else "n/a"
 
 
-def convergence_markdown(results: list[dict]) -> str:
+def convergence_markdown(results: list) -> str:
     """One paragraph: registrations, the fraction that met the optimiser's tolerance,
     mean iterations and the largest final gradient (in the optimiser's variables)."""
-    pairs = [p for r in results for p in r["alpha2"].values()]
-    n = sum(p["n_registrations"] for p in pairs)
-    bad = sum(p["non_converged_registrations"] for p in pairs)
-    iters = sum(p.get("n_iterations", 0) for p in pairs)
-    grads = [p["max_gradient_norm"] for p in pairs if "max_gradient_norm" in p]
-    grad = max(grads, default=float("nan"))
+    c = RegistrationCounts.total(p.counts for r in results for p in r.pairs)
+    n, bad = c.n_registrations, c.non_converged
     if n == 0:
         return "No registration.\n"
     return (
         f"Registrations: {n}; {n - bad} ({(n - bad) / n:.2%}) met the optimiser's tolerance, "
-        f"{bad} stopped at the iteration limit; {iters / n:.0f} iterations on average; "
-        f"largest final gradient {grad:.3g} (optimiser's normalised variables).\n"
+        f"{bad} stopped at the iteration limit; {c.n_iterations / n:.0f} iterations on average "
+        f"({c.n_flow_evaluations / n:.0f} flow passes); largest final gradient "
+        f"{c.max_gradient_norm:.3g} (optimiser's normalised variables).\n"
     )
 
 
-def summary_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
+def _means(rows: list[dict]) -> dict:
+    return {(r["alpha2"], r["measure"], r["variant"]): r["mean"] for r in rows}
+
+
+def summary_markdown(rows: list[dict], unit: str) -> str:
     """A Table-1-style Markdown table: mean errors per ``alpha^2``, residual vs no residual."""
     alphas = sorted({r["alpha2"] for r in rows})
-    get = {(r["alpha2"], r["measure"], r["variant"]): r["mean"] for r in rows}
+    get = _means(rows)
+    other = next(r["variant"] for r in rows if r["variant"] not in (*VARIANTS, "both"))
     head = "| Error type | " + " | ".join(
         f"a²={a:g} Residual | a²={a:g} No residual" for a in alphas
     )
-    lines = [f"Mean over subjects, in {unit}.", "", head + " |"]
+    lines = [f"Mean over subjects, distances in {unit}.", "", head + " |"]
     lines.append("|---" * (1 + 2 * len(alphas)) + "|")
     for name in (*ERROR_NAMES, "ase"):
         cells = []
         for a in alphas:
             cells += [_cell(get, (a, name, v)) for v in VARIANTS]
-        lines.append(f"| {_LABELS[name]} | " + " | ".join(cells) + " |")
-    single = [("ase", "fanning", "Area strain error (fanning)")]
-    single += [
-        (name, "both", label)
-        for name, label in (
-            ("registration_error", "Reg. error"),
-            ("rkhs_norm", "Reg. norm"),
-            ("inverse_consistency", "Inverse cons."),
-        )
-    ]
+        lines.append(f"| {LABELS[name]} | " + " | ".join(cells) + " |")
+    single = [("ase", other, f"Area strain error ({row_label(other)})")]
+    single += [(name, "both", label) for name, label in _REGISTRATION_LABELS.items()]
     for name, variant, label in single:
         cells = []
         for a in alphas:  # one value per alpha^2, shared by both variants
@@ -113,11 +124,40 @@ def summary_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
     return "\n".join(lines) + "\n"
 
 
+def terminal_summary(rows: list[dict], unit: str, n_subjects: int) -> str:
+    """The summary in at most 100 columns: one line per ``alpha^2``, two tables.
+
+    Each cell of the first table holds the mean with and without residuals;
+    the second holds the third transport's ASE and the registration measures.
+    """
+    alphas = sorted({r["alpha2"] for r in rows})
+    get = _means(rows)
+    other = next(r["variant"] for r in rows if r["variant"] not in (*VARIANTS, "both"))
+    names = {"midpoint_distance": "midpoint", "centrality": "centrality",
+             "involutivity": "involutivity", "transvectivity": "transvect.",
+             "ase": "ASE pole ladder"}  # fmt: skip
+    lines = [
+        f"Means over {n_subjects} subjects, distances in {unit}; cell: with / without residuals.",
+        "α²      | " + " | ".join(f"{v:<15}" for v in names.values()),
+    ]
+    for a in alphas:
+        cells = [f"{_cell(get, (a, n, 'residual'))} / {_cell(get, (a, n, 'no_residual'))}"
+                 for n in names]  # fmt: skip
+        lines.append(f"{a:<7g} | " + " | ".join(f"{c:<15}" for c in cells))
+    heads = [f"ASE {other}", *_REGISTRATION_LABELS.values()]
+    lines += ["", "α²      | " + " | ".join(f"{h:<15}" for h in heads)]
+    for a in alphas:
+        cells = [_cell(get, (a, "ase", other))]
+        cells += [_cell(get, (a, n, "both")) for n in _REGISTRATION_LABELS]
+        lines.append(f"{a:<7g} | " + " | ".join(f"{c:<15}" for c in cells))
+    return "\n".join(line.rstrip() for line in lines) + "\n"
+
+
 def _fmt(v, spec: str) -> str:
     return "n/a" if v is None else format(v, spec)
 
 
-def paired_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
+def paired_markdown(rows: list[dict], unit: str) -> str:
     """The paired comparison residual vs no residual as a Markdown table."""
     lines = [
         "Paired comparison, with residuals minus without, per subject "
@@ -135,26 +175,26 @@ def paired_markdown(rows: list[dict], unit: str = DEFAULT_UNIT) -> str:
         )
         ci = f"[{_fmt(r['ci_low'], '.3g')}, {_fmt(r['ci_high'], '.3g')}]"
         lines.append(
-            f"| {r['alpha2']:g} | {_LABELS[r['measure']]} | {r['n']} | {frac} | "
+            f"| {r['alpha2']:g} | {LABELS[r['measure']]} | {r['n']} | {frac} | "
             f"{_fmt(r['median_difference'], '.3g')} | {ci} | {_fmt(r['wilcoxon_p'], '.3g')} "
             f"| {r['note']} |"
         )
     return "\n".join(lines) + "\n"
 
 
-def failures_markdown(results: list[dict]) -> str:
+def failures_markdown(results: list) -> str:
     """The failed (subject, alpha^2) pairs with their error, or an empty string."""
-    failed = [(r["subject"], a, e) for r in results for a, e in r.get("failed", {}).items()]
+    failed = [f for r in results for f in r.failures]
     if not failed:
         return ""
-    subjects = len({f[0] for f in failed})
+    subjects = len({f.subject for f in failed})
     lines = [f"{len(failed)} pair(s) of {subjects} subject(s) failed (left out above):", ""]
-    lines += [f"- {name}, α² = {float(a):g}: {err}" for name, a, err in failed]
+    lines += [f"- {f.subject}, α² = {f.alpha2:g}: {f.error}" for f in failed]
     return "\n".join(lines) + "\n"
 
 
 def write_report(
-    results: list[dict], output, atlas, faces, map_subject_ed=None, unit: str | None = None
+    results: list, output, atlas, faces, subjects_ed=None, unit: str | None = None
 ) -> dict:
     """Write the tables and figures of the study; return their paths.
 
@@ -166,42 +206,47 @@ def write_report(
 
     Parameters
     ----------
-    results : list of per-subject result dicts (:attr:`ladders.study.running.runner.StudyOutcome.results`)
+    results : list of SubjectResults
+        :attr:`ladders.study.running.runner.StudyOutcome.results`.
     output : path of the results folder
     atlas : array (k, 3); faces : int array (f, 3)
-    map_subject_ed : array (k, 3), optional
-        End-diastole mesh of the first subject, for the area strain maps.
+    subjects_ed : mapping, optional
+        End-diastole vertices ``(k, 3)`` by subject name, for the area strain maps
+        of the representative subject (Fig. 5b; not drawn without them).
     unit : str, optional
-        Unit of the distances; default: the results' ``unit`` field, else ``"mm"``.
+        Unit of the distances; default: the results' ``unit``.
+
+    Returns
+    -------
+    dict
+        Paths by key; ``"maps_subject"`` names the subject of Fig. 5b.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     output = Path(output)
-    ok = [r for r in results if r["alpha2"]]
+    ok = [r for r in results if r.pairs]
     paths = {k: output / v for k, v in _FILES.items()}
     if not ok:  # every pair failed: only the list of failures
         atomic_write_text(paths["summary_md"], failures_markdown(results))
         return {"summary_md": paths["summary_md"]}
-    tidy = tidy_rows(results, unit)
-    unit = unit or next(row["unit"] for row in tidy if row["measure"] == "centrality")
+    unit = unit or ok[0].pairs[0].unit
     rows, paired = summarize(results), paired_statistics(results, seed=0)
     text = summary_markdown(rows, unit) + "\n" + convergence_markdown(results) + "\n"
     text += paired_markdown(paired, unit)
     if failures_markdown(results):
         text += "\n" + failures_markdown(results)
     atomic_write_text(paths["summary_csv"], summary_csv(rows))
-    atomic_write_text(paths["results_csv"], tidy_csv(tidy))
+    atomic_write_text(paths["results_csv"], tidy_csv(tidy_rows(results, unit)))
     atomic_write_text(paths["paired_csv"], paired_csv(paired))
     atomic_write_text(paths["summary_md"], text)
     plot_errors(ok, paths["errors_png"], unit)
     plot_ase(ok, paths["ase_png"])
-    if map_subject_ed is not None and results[0]["alpha2"]:
+    if subjects_ed is not None:
         paths["maps_png"] = output / "fig5b_area_strain_maps.png"
-        plot_maps(
-            results[0], np.asarray(atlas), np.asarray(map_subject_ed), faces,
-            paths["maps_png"], len(ok),
-        )  # fmt: skip
+        paths["maps_subject"] = plot_maps(
+            ok, np.asarray(atlas), subjects_ed, faces, paths["maps_png"]
+        )
     return paths
 
 

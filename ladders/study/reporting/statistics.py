@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 
-from ..running.pipeline import ERROR_NAMES
+from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
+from .selection import alpha_values, transport_rows
 
 __all__ = [
-    "DEFAULT_UNIT",
     "MEASURES",
     "tidy_rows",
     "tidy_csv",
@@ -20,73 +20,43 @@ __all__ = [
     "paired_csv",
 ]
 
-#: Unit of the distances when the results do not carry one.
-DEFAULT_UNIT = "mm"
-
 #: Measures of the tidy table, in order.
-MEASURES = (*ERROR_NAMES, "ase", "registration_error", "registration_norm",
-            "inverse_consistency", "converged")  # fmt: skip
-
-_SHARED = {  # measures of the registration T -> S, shared by both variants
-    "registration_error": ("registration_error",),
-    "registration_norm": ("registration_norm", "rkhs_norm"),
-    "inverse_consistency": ("inverse_consistency",),
-    "converged": ("converged",),
-}
+MEASURES = (*ERROR_NAMES, "ase", *REGISTRATION_MEASURES, "converged")
 _FIXED_UNITS = {"ase": "1", "converged": "bool", "registration_norm": "rkhs"}
 
 
-def _unit(pair: dict, measure: str, unit: str | None) -> str:
-    """Unit of a measure: given, else recorded in the result, else :data:`DEFAULT_UNIT`."""
-    units = pair.get("units")
-    if isinstance(units, dict) and measure in units:
-        return str(units[measure])
-    if measure in _FIXED_UNITS:
-        return _FIXED_UNITS[measure]
-    return unit or str(pair.get("unit", DEFAULT_UNIT))
-
-
-def _shared_value(pair: dict, measure: str):
-    for key in _SHARED[measure]:
-        if key in pair:
-            return pair[key]
-    raise KeyError(f"result has none of {_SHARED[measure]}")
-
-
-def tidy_rows(results: list[dict], unit: str | None = None) -> list[dict]:
+def tidy_rows(results: list, unit: str | None = None) -> list[dict]:
     """One row per ``(subject, alpha2, variant, measure)``.
 
     Variants ``residual`` and ``no_residual`` carry the four errors and the ASE
     of the pole ladder, and the measures of the registration ``T -> S``
-    (the same values in both, since the registration is shared); ``fanning``
-    carries its ASE. ``converged`` is 1.0 or 0.0.
+    (the same values in both, since the registration is shared); the third
+    transport method (``fanning`` or ``svf_conjugation``) carries its ASE.
+    ``converged`` is 1.0 or 0.0.
 
     Parameters
     ----------
-    results : list of dict
-        Per-subject results (:attr:`ladders.study.running.runner.StudyOutcome.results`).
+    results : list of SubjectResults
+        :attr:`ladders.study.running.runner.StudyOutcome.results`.
     unit : str, optional
-        Unit of the distances; default: the results' ``unit`` field, else
-        :data:`DEFAULT_UNIT`.
+        Unit of the distances; default: each result's ``unit``.
     """
+    if not any(r.pairs for r in results):
+        return []
     rows = []
+    other = transport_rows(results)[-1]
     for r in results:
-        for key in sorted(r["alpha2"], key=float):
-            pair = r["alpha2"][key]
-            for variant in ("residual", "no_residual", "fanning"):
-                names = ("ase",) if variant == "fanning" else MEASURES
-                for m in names:
-                    value = (
-                        pair[variant][m] if m in (*ERROR_NAMES, "ase") else _shared_value(pair, m)
-                    )
+        for pair in r.pairs:
+            for variant in (*VARIANTS, other):
+                for m in MEASURES if variant in VARIANTS else ("ase",):
                     rows.append(
                         {
-                            "subject": r["subject"],
-                            "alpha2": float(key),
+                            "subject": r.subject,
+                            "alpha2": pair.alpha2,
                             "variant": variant,
                             "measure": m,
-                            "value": float(value),
-                            "unit": _unit(pair, m, unit),
+                            "value": float(pair.measure(variant, m)),
+                            "unit": _FIXED_UNITS.get(m, unit or pair.unit),
                         }
                     )
     return rows
@@ -154,22 +124,21 @@ def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: i
     return out
 
 
-def paired_statistics(results: list[dict], seed: int = 0, n_boot: int = 2000) -> list[dict]:
+def paired_statistics(results: list, seed: int = 0, n_boot: int = 2000) -> list[dict]:
     """:func:`paired_comparison` per ``alpha^2`` and error (the four errors and the ASE).
 
     Subjects without a result at an ``alpha^2`` (failed) are left out of that ``alpha^2``.
     The bootstrap uses ``numpy.random.default_rng(seed)``.
     """
     rng = np.random.default_rng(seed)
-    keys = sorted({k for r in results for k in r["alpha2"]}, key=float)
     rows = []
-    for key in keys:
-        pairs = [r["alpha2"][key] for r in results if key in r["alpha2"]]
+    for a2 in alpha_values(results):
+        pairs = [p for p in (r.at(a2) for r in results) if p is not None]
         for name in (*ERROR_NAMES, "ase"):
-            res = [p["residual"][name] for p in pairs]
-            nores = [p["no_residual"][name] for p in pairs]
+            res = [p.measure("residual", name) for p in pairs]
+            nores = [p.measure("no_residual", name) for p in pairs]
             stats = paired_comparison(res, nores, rng, n_boot=n_boot)
-            rows.append({"alpha2": float(key), "measure": name, **stats})
+            rows.append({"alpha2": a2, "measure": name, **stats})
     return rows
 
 
