@@ -12,7 +12,13 @@ which this package never imports.
 """
 
 from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
-from .fanning import FanningResult, fanning_scheme, fanning_transport
+from .fanning import (
+    FanningResult,
+    MomentumFlowSpace,
+    NoMomentumFlowError,
+    fanning_scheme,
+    fanning_transport,
+)
 from .pole_ladder import pole_ladder
 from .rungs import LadderTrajectory
 from .schild_ladder import schild_ladder
@@ -42,6 +48,8 @@ __all__ = [
     "ladder_convergence",
     "loglog_slope",
     "FanningResult",
+    "MomentumFlowSpace",
+    "NoMomentumFlowError",
     "fanning_scheme",
     "fanning_transport",
     "NABLA_R_COEFFICIENTS",

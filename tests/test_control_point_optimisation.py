@@ -129,7 +129,7 @@ def test_fanning_takes_the_tangents_control_points():
     # The tangent is carried to the geodesic's control points by matching its velocity there.
     c = geodesic.control_points
     w0 = space.kernel_solve(c, space.kernel.convolve(c, u.control_points, u.momenta))
-    ref = fanning_scheme(space.kernel, c, geodesic.momenta, w0, n_steps=5)
+    ref = fanning_scheme(space, c, geodesic.momenta, w0, n_steps=5)
     np.testing.assert_allclose(out.momenta, ref.momenta, atol=1e-12)
     # A tangent already at the geodesic's control points is used as it is.
     same = fanning_transport(space, s, t, LandmarkTangent(c, w0), n_steps=5)

@@ -137,7 +137,13 @@ def _add_model_arguments(p) -> None:
         default="rms",
         help="unit of the errors: per-vertex RMS (the paper's mm), Frobenius or mean distance",
     )
-    p.add_argument("--integrator", choices=("euler", "rk2", "rk4"), default="euler")
+    p.add_argument(
+        "--integrator",
+        choices=("euler", "rk2", "rk4"),
+        default="euler",
+        help="time integrator of the flows, used by the registrations, the shooting and the "
+        "fanning scheme",
+    )
     p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
     p.add_argument(
         "--max-iter", type=positive_int, default=2000, help="L-BFGS-B iterations per registration"
