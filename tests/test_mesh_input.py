@@ -108,7 +108,8 @@ def test_non_triangle_and_unreadable_files_name_the_file(tmp_path):
         read_mesh(tmp_path / "bad.vtu")
     (tmp_path / "bad.ply").write_bytes(b"nonsense")
     with pytest.raises(
-        MeshFolderError, match=r"bad\.ply: cannot be read as a mesh \(meshio: .*trimesh: "
+        MeshFolderError,
+        match=r"bad\.ply: cannot be read as a mesh \(not a PLY file: it starts with b'nonsense'",
     ):
         read_mesh(tmp_path / "bad.ply")
     (tmp_path / "grid.vtk").write_text(
@@ -252,3 +253,41 @@ def test_mismatched_vtp_subject_is_refused_by_the_cli(tmp_path, capsys):
     (folder / "atlas.vtp").write_bytes(b"<VTKFile type='PolyData'><PolyData>")
     assert main(["study", "--meshes", str(folder), "-o", str(tmp_path / "o"), *FAST]) == 2
     assert "atlas.vtp: not a VTK XML file" in capsys.readouterr().err
+
+
+def test_readers_are_chosen_by_extension_and_header(tmp_path):
+    """One table of formats; the header picks the reader or refuses the file."""
+    from ladders.study.meshes import MESH_EXTENSIONS, WRITE_EXTENSIONS
+    from ladders.study.meshes.mesh_readers import MESH_FORMATS
+
+    assert MESH_EXTENSIONS == tuple(MESH_FORMATS)
+    assert set(WRITE_EXTENSIONS) == set(MESH_EXTENSIONS) - {".vtp"}
+    v, f = COHORT.atlas, COHORT.faces
+    # An OFF variant meshio does not read (COFF: a colour per vertex) goes to trimesh.
+    lines = ["COFF", f"{len(v)} {len(f)} 0"]
+    lines += [f"{x!r} {y!r} {z!r} 255 0 0 255" for x, y, z in v.tolist()]
+    lines += [f"3 {a} {b} {c}" for a, b, c in f.tolist()]
+    (tmp_path / "c.off").write_text("\n".join(lines) + "\n")
+    got_v, got_f = read_mesh(tmp_path / "c.off")
+    np.testing.assert_array_equal(got_v, v)
+    np.testing.assert_array_equal(got_f, f)
+    # A file whose header is another format's is refused, naming both.
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(v, [("triangle", f)]))
+    (tmp_path / "m.ply").write_bytes((tmp_path / "m.vtu").read_bytes())
+    with pytest.raises(MeshFolderError, match=r"m\.ply: .*not a PLY file: it starts with b'<"):
+        read_mesh(tmp_path / "m.ply")
+    (tmp_path / "m.vtk").write_text("solid x\n")
+    with pytest.raises(MeshFolderError, match=r"m\.vtk: .*not a legacy VTK file"):
+        read_mesh(tmp_path / "m.vtk")
+
+
+def test_binary_ply_is_written_through_meshio_in_double(tmp_path):
+    from ladders.study.meshes import write_mesh
+
+    path = write_mesh(tmp_path / "a.ply", COHORT.atlas, COHORT.faces)
+    header = path.read_bytes().split(b"end_header")[0]
+    assert b"format binary_little_endian" in header and b"property double x" in header
+    assert b"meshio" in header  # the writer's own comment
+    back = meshio.read(path)
+    np.testing.assert_array_equal(back.points, COHORT.atlas)
+    np.testing.assert_array_equal(back.cells_dict["triangle"], COHORT.faces)

@@ -17,12 +17,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import trimesh
-from trimesh.exchange.obj import export_obj
-from trimesh.exchange.off import export_off
 
 from ..errors import MeshFolderError
-from .mesh_readers import read_first, read_with_meshio, read_with_trimesh, vtk_dataset
+from .mesh_readers import MESH_FORMATS, reader_for
 from .vtk_io import read_vtk, write_vtk
 from .vtk_xml import read_vtp
 
@@ -39,8 +36,8 @@ __all__ = [
 ]
 
 
-#: Extensions :func:`read_mesh` reads.
-MESH_EXTENSIONS = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu", ".vtp")
+#: Extensions :func:`read_mesh` reads (the registry :data:`~.mesh_readers.MESH_FORMATS`).
+MESH_EXTENSIONS = tuple(MESH_FORMATS)
 #: Extensions of mesh formats not read; such files in a cohort folder are listed in a warning.
 OTHER_MESH_EXTENSIONS = (
     ".msh", ".mesh", ".xdmf", ".xmf", ".inp", ".med", ".gii", ".glb", ".gltf", ".pvtu", ".pvtp",
@@ -48,7 +45,7 @@ OTHER_MESH_EXTENSIONS = (
     ".bdf", ".exo", ".vti", ".vts", ".vtr",
 )  # fmt: skip
 #: Extensions :func:`write_mesh` writes.
-WRITE_EXTENSIONS = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu")
+WRITE_EXTENSIONS = tuple(ext for ext, fmt in MESH_FORMATS.items() if fmt.write is not None)
 
 
 def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
@@ -75,20 +72,7 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
         raise MeshFolderError(f"{path}: unsupported extension, expected one of {MESH_EXTENSIONS}")
     if not path.is_file():
         raise MeshFolderError(f"{path}: no such file")
-    meshio = ("meshio", read_with_meshio)
-    trimesh_ = ("trimesh", lambda p: read_with_trimesh(p, faces))
-    if ext == ".vtk":
-        v, f = read_vtk(path) if vtk_dataset(path) == "POLYDATA" else read_with_meshio(path)
-    elif ext == ".vtp":
-        v, f = read_vtp(path)
-    elif ext == ".vtu":
-        v, f = read_with_meshio(path)
-    elif ext in (".ply", ".off"):
-        v, f = read_first(path, [meshio, trimesh_])
-    elif ext == ".obj":
-        v, f = read_first(path, [trimesh_, meshio])
-    else:
-        v, f = read_with_trimesh(path, faces)
+    v, f = reader_for(path, faces)()
     if len(v) == 0 or len(f) == 0:
         raise MeshFolderError(f"{path}: cannot be read as a triangle mesh (no vertices or faces)")
     if not np.isfinite(v).all():
@@ -101,42 +85,14 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
 def write_mesh(path, vertices, faces) -> Path:
     """Write a triangle mesh; the format follows the extension (see ``WRITE_EXTENSIONS``).
 
-    PLY is written as binary little-endian with double coordinates, OBJ and OFF
-    with 17 significant digits, VTK as ASCII legacy polydata, VTU through meshio
-    (double, zlib-compressed), STL as binary float32 (the format's only precision).
+    PLY is written through meshio as binary little-endian with double coordinates,
+    OBJ and OFF through trimesh with 17 significant digits, VTK as ASCII legacy
+    polydata, VTU through meshio (double, zlib-compressed), STL through trimesh as
+    binary float32 (the format's only precision).
     """
     path = Path(path)
-    ext = path.suffix.lower()
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    if ext == ".vtk":
-        return write_vtk(path, v, f)
-    if ext == ".vtu":
-        import meshio
-
-        meshio.write(path, meshio.Mesh(v, [("triangle", f)]), file_format="vtu")
-        return path
-    if ext == ".ply":
-        header = (
-            f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\n"
-            "property double x\nproperty double y\nproperty double z\n"
-            f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n"
-        )
-        packed = np.zeros(len(f), dtype=[("n", "u1"), ("idx", "<i4", (3,))])
-        packed["n"], packed["idx"] = 3, f
-        path.write_bytes(header.encode() + v.astype("<f8").tobytes() + packed.tobytes())
-        return path
-    mesh = trimesh.Trimesh(v, f, process=False)
-    if ext == ".obj":
-        text = export_obj(
-            mesh, include_normals=False, include_color=False, include_texture=False,
-            digits=17, header=None,
-        )  # fmt: skip
-        path.write_text(text)
-    elif ext == ".off":
-        path.write_text(export_off(mesh, digits=17))
-    elif ext == ".stl":
-        mesh.export(path, file_type="stl")
-    else:
+    fmt = MESH_FORMATS.get(path.suffix.lower())
+    if fmt is None or fmt.write is None:
         raise MeshFolderError(f"{path}: unsupported extension, expected one of {WRITE_EXTENSIONS}")
+    fmt.write(path, np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int64))
     return path

@@ -1,21 +1,29 @@
-"""The readers behind :func:`ladders.study.meshes.mesh_io.read_mesh`, one per library, and their choice.
+"""The registry of mesh formats: one table of extensions, each with its reader and writer.
 
 Every format is read so that vertex ``i`` of the file is vertex ``i`` of the
 returned array (no merging, no reordering), since a study's meshes are in
-vertex correspondence through their vertex order:
+vertex correspondence through their vertex order. :func:`reader_for` picks the
+reader from the extension and, where one extension holds several kinds of file,
+from the file's header; a header that does not belong to the extension's format
+is refused with a message saying what the file starts with.
 
-========  =========================================================================
-``.vtk``  legacy VTK: ``DATASET POLYDATA`` by :func:`ladders.study.meshes.vtk_io.read_vtk`
-          (meshio 5 does not read polydata), every other dataset (e.g. the
-          ``UNSTRUCTURED_GRID`` meshio writes) by meshio
-``.vtu``  meshio
-``.vtp``  :func:`ladders.study.meshes.vtk_xml.read_vtp` (meshio does not read VTK XML PolyData)
-``.ply``  meshio, then trimesh if meshio fails
-``.off``  meshio, then trimesh if meshio fails
-``.obj``  trimesh (``process=False, maintain_order=True``), then meshio: meshio 5
-          fails on OBJ files with texture coordinates or normals
-``.stl``  trimesh, then the float32 triangle soup is indexed (see :func:`merge_soup`)
-========  =========================================================================
+========  ==================================================================  ==============
+ext       read with (chosen by the header)                                    written with
+========  ==================================================================  ==============
+``.vtk``  ``DATASET POLYDATA``: :func:`ladders.study.meshes.vtk_io.read_vtk`   own writer
+          (meshio 5 does not read polydata); any other dataset (e.g. the      (polydata)
+          ``UNSTRUCTURED_GRID`` meshio writes): meshio
+``.vtu``  meshio (``<VTKFile``)                                                meshio
+``.vtp``  :func:`ladders.study.meshes.vtk_xml.read_vtp` (``<VTKFile``;         --
+          meshio does not read VTK XML PolyData)
+``.ply``  meshio (``ply``)                                                     meshio, binary
+``.off``  meshio when the header is ``OFF``; trimesh for its variants          trimesh
+          (``COFF``, ``NOFF``, ...), which meshio does not read
+``.obj``  trimesh (``process=False, maintain_order=True``): meshio 5 fails     trimesh
+          on OBJ files with texture coordinates or normals
+``.stl``  trimesh, then the float32 triangle soup is indexed                  trimesh
+          (see :func:`merge_soup`)
+========  ==================================================================  ==============
 
 meshio cells other than triangles are refused, except points (``vertex``) and
 lines, which are ignored as in legacy VTK files.
@@ -25,16 +33,29 @@ from __future__ import annotations
 
 import io
 import warnings
+from collections.abc import Callable
 from contextlib import redirect_stderr, redirect_stdout
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshFolderError
+from .vtk_io import read_vtk, write_vtk
+from .vtk_xml import read_vtp
 
-__all__ = ["read_with_meshio", "read_with_trimesh", "merge_soup", "vtk_dataset"]
+__all__ = [
+    "MeshFormat",
+    "MESH_FORMATS",
+    "reader_for",
+    "read_with_meshio",
+    "read_with_trimesh",
+    "merge_soup",
+    "vtk_dataset",
+]
 
 _IGNORED_CELLS = ("vertex", "line", "line3")
+_HEAD_BYTES = 1024
 
 
 def read_with_meshio(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -119,19 +140,122 @@ def vtk_dataset(path: Path) -> str:
     return ""
 
 
-def read_first(path: Path, readers) -> tuple[np.ndarray, np.ndarray]:
-    """The result of the first of ``readers`` (``(label, function)`` pairs) that succeeds.
+def _head(path: Path) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(_HEAD_BYTES)
+    except OSError as exc:
+        raise MeshFolderError(f"{path}: cannot be read ({exc})") from exc
 
-    A file one reader reads but refuses (e.g. quadrilateral cells) raises that
-    reader's error; a file none can parse raises one error naming every cause.
+
+def _expect(path: Path, head: bytes, marker: bytes, what: str) -> None:
+    """Refuse a file whose header does not hold ``marker`` (the format's signature)."""
+    found = head.lstrip()[: len(marker)] == marker if marker == b"ply" else marker in head
+    if not found:
+        raise MeshFolderError(
+            f"{path}: cannot be read as a mesh (not a {what} file: it starts with "
+            f"{head.lstrip()[:20]!r}, expected {marker!r})"
+        )
+
+
+def _vtk_reader(path: Path, head: bytes):
+    _expect(path, head, b"# vtk DataFile", "legacy VTK")
+    return read_vtk if vtk_dataset(path) == "POLYDATA" else read_with_meshio
+
+
+def _off_reader(path: Path, head: bytes):
+    first = head.lstrip().split(maxsplit=1)[:1]
+    if not first or not first[0].endswith(b"OFF"):
+        _expect(path, head, b"OFF", "OFF")
+    return read_with_meshio if first[0] == b"OFF" else read_with_trimesh
+
+
+def _with_header(marker: bytes, what: str, reader: Callable):
+    def choose(path: Path, head: bytes):
+        _expect(path, head, marker, what)
+        return reader
+
+    return choose
+
+
+def _write_meshio(file_format: str):
+    def write(path: Path, v: np.ndarray, f: np.ndarray) -> None:
+        import meshio
+
+        mesh = meshio.Mesh(v, [("triangle", f.astype(np.int32))])
+        meshio.write(path, mesh, file_format=file_format, binary=True)
+
+    return write
+
+
+def _write_trimesh(path: Path, v: np.ndarray, f: np.ndarray) -> None:
+    import trimesh
+    from trimesh.exchange.obj import export_obj
+    from trimesh.exchange.off import export_off
+
+    mesh = trimesh.Trimesh(v, f, process=False)
+    ext = path.suffix.lower()
+    if ext == ".obj":
+        path.write_text(
+            export_obj(
+                mesh,
+                include_normals=False,
+                include_color=False,
+                include_texture=False,
+                digits=17,
+                header=None,
+            )  # fmt: skip
+        )
+    elif ext == ".off":
+        path.write_text(export_off(mesh, digits=17))
+    else:
+        mesh.export(path, file_type="stl")
+
+
+@dataclass(frozen=True)
+class MeshFormat:
+    """One row of the registry.
+
+    Attributes
+    ----------
+    name : str
+    choose_reader : callable ``(path, header bytes) -> reader``
+        Checks the header and returns ``reader(path, faces) -> (vertices, faces)``.
+    write : callable ``(path, vertices, faces)``, or None when the format is read only
     """
-    causes = []
-    for label, reader in readers:
-        try:
-            return reader(path)
-        except MeshFolderError as exc:
-            text = str(exc).removeprefix(f"{path}: ")
-            if not text.startswith("cannot be read as a mesh ("):
-                raise
-            causes.append(f"{label}: {text.removeprefix('cannot be read as a mesh (')[:-1]}")
-    raise MeshFolderError(f"{path}: cannot be read as a mesh ({'; '.join(causes)})")
+
+    name: str
+    choose_reader: Callable
+    write: Callable | None = None
+
+
+def _trimesh_only(path: Path, head: bytes):
+    return read_with_trimesh
+
+
+#: The formats, by extension: the single table of readers and writers.
+MESH_FORMATS = {
+    ".ply": MeshFormat("PLY", _with_header(b"ply", "PLY", read_with_meshio), _write_meshio("ply")),
+    ".obj": MeshFormat("OBJ", _trimesh_only, _write_trimesh),
+    ".stl": MeshFormat("STL", _trimesh_only, _write_trimesh),
+    ".off": MeshFormat("OFF", _off_reader, _write_trimesh),
+    ".vtk": MeshFormat("legacy VTK", _vtk_reader, lambda p, v, f: write_vtk(p, v, f)),
+    ".vtu": MeshFormat(
+        "VTK XML unstructured grid",
+        _with_header(b"<VTKFile", "VTK XML", read_with_meshio),
+        _write_meshio("vtu"),
+    ),
+    ".vtp": MeshFormat("VTK XML PolyData", _with_header(b"<VTKFile", "VTK XML", read_vtp)),
+}
+
+
+def reader_for(path: Path, faces=None) -> Callable[[], tuple[np.ndarray, np.ndarray]]:
+    """The reader of ``path`` (by its extension and header), bound to the file.
+
+    ``faces`` is used by the STL reader only (see :func:`merge_soup`).
+    """
+    fmt = MESH_FORMATS[path.suffix.lower()]
+    reader = fmt.choose_reader(path, _head(path))
+    if reader is read_with_trimesh:
+        return lambda: read_with_trimesh(path, faces)
+    return lambda: reader(path)
