@@ -66,6 +66,16 @@ def test_paired_comparison_known_answer():
     assert res["median_difference"] == -3.0
     assert res["wilcoxon_p"] == pytest.approx(2 / 2**5)  # exact two-sided, all one sign
     assert -5 <= res["ci_low"] <= -3 <= res["ci_high"] <= -1
+    # The interval is scipy's paired BCa bootstrap of the median difference, same seed.
+    from scipy.stats import bootstrap
+
+    expected = bootstrap(
+        (np.array([1.0, 2, 3, 4, 5]), np.array([2.0, 4, 6, 8, 10])),
+        lambda x, y, axis: np.median(x - y, axis=axis),
+        paired=True, vectorized=True, method="BCa", n_resamples=2000,
+        rng=np.random.default_rng(0),
+    ).confidence_interval  # fmt: skip
+    assert (res["ci_low"], res["ci_high"]) == (expected.low, expected.high)
     again = paired_comparison([1, 2, 3, 4, 5], [2, 4, 6, 8, 10], np.random.default_rng(0))
     assert again == res  # seeded
     mixed = paired_comparison([0, 5, 0, 5, 0, 5, 0], [1, 0, 1, 0, 1, 0, 1], rng)
@@ -82,6 +92,13 @@ def test_paired_comparison_degenerate_cases():
     assert empty["n"] == 0 and empty["wilcoxon_p"] is None and empty["median_difference"] is None
     one = paired_comparison([1.0], [3.0], rng)
     assert one["wilcoxon_p"] == pytest.approx(1.0) and "n = 1" in one["note"]
+    assert (one["ci_low"], one["ci_high"]) == (-2.0, -2.0)  # all differences equal
+    assert "all differences equal" in one["note"]
+    two = paired_comparison([1.0, 2.0], [2.0, 2.0], rng)
+    assert two["ci_low"] is None and two["ci_high"] is None and "n = 2 < 3" in two["note"]
+    ties = paired_comparison([0, 0, 0, 0, 1], [0, 0, 0, 0, 0], rng)  # BCa is 0 / 0 here
+    assert (ties["ci_low"], ties["ci_high"]) == (0.0, 1.0)
+    assert "percentile interval" in ties["note"]
     with pytest.raises(ValueError, match="residual, no_residual: .*shapes"):
         paired_comparison([1.0, 2.0], [1.0], rng)
     with pytest.raises(ValueError, match="finite"):

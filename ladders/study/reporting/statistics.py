@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import warnings
 
 import numpy as np
 
@@ -15,6 +16,7 @@ __all__ = [
     "MEASURES",
     "tidy_rows",
     "tidy_csv",
+    "bootstrap_median_ci",
     "paired_comparison",
     "paired_statistics",
     "paired_csv",
@@ -72,6 +74,50 @@ def tidy_csv(rows: list[dict]) -> str:
     return buf.getvalue()
 
 
+def _median_difference(x, y, axis=-1):
+    return np.median(x - y, axis=axis)
+
+
+def bootstrap_median_ci(a, b, rng: np.random.Generator, n_boot: int = 2000):
+    """95 % BCa bootstrap interval of the median of ``a - b``, subjects resampled in pairs.
+
+    ``scipy.stats.bootstrap`` with ``paired=True`` and ``method="BCa"``. Its
+    degenerate cases have a documented answer instead of NaN:
+
+    * all differences equal: every resample has that median, and the interval is
+      that value, ``[d, d]``;
+    * fewer than 3 subjects (and unequal differences): no interval (``None``);
+    * a BCa interval that is not finite (ties make its acceleration 0 / 0): the
+      percentile interval of the same resamples.
+
+    Returns
+    -------
+    low, high : float or None
+    note : str
+        Which fallback was used, or ``""``.
+    """
+    from scipy.stats import bootstrap
+
+    d = a - b
+    if np.all(d == d[0]):
+        return float(d[0]), float(d[0]), "all differences equal: the interval is that value"
+    if d.size < 3:
+        return None, None, f"n = {d.size} < 3: no bootstrap interval"
+    kwargs = {"paired": True, "vectorized": True, "rng": rng}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the degenerate BCa case is handled below
+        res = bootstrap((a, b), _median_difference, n_resamples=n_boot, method="BCa", **kwargs)
+        low, high = res.confidence_interval
+        if np.isfinite(low) and np.isfinite(high):
+            return float(low), float(high), ""
+        res = bootstrap(
+            (a, b), _median_difference, n_resamples=0, method="percentile",
+            bootstrap_result=res, **kwargs,
+        )  # fmt: skip
+    low, high = res.confidence_interval
+    return float(low), float(high), "BCa undefined (ties): percentile interval"
+
+
 def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: int = 2000) -> dict:
     """Paired comparison of two samples (``residual - no_residual`` per subject).
 
@@ -88,11 +134,12 @@ def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: i
     -------
     dict
         ``n``; ``fraction_residual_lower`` (share of subjects with a strictly
-        lower error with residuals); ``median_difference`` and its 95 %
-        percentile-bootstrap interval ``ci_low``, ``ci_high``; ``wilcoxon_p``
-        (two-sided signed-rank test, exact for small samples) with ``note``
-        explaining a missing value (no subject; all differences zero gives p = 1).
-        Values that cannot be computed are ``None``, never NaN.
+        lower error with residuals); ``median_difference`` and its 95 % BCa
+        bootstrap interval ``ci_low``, ``ci_high`` (:func:`bootstrap_median_ci`,
+        with its fallbacks); ``wilcoxon_p`` (two-sided signed-rank test, exact for
+        small samples) with ``note`` explaining a missing value or a fallback (no
+        subject; all differences zero gives p = 1). Values that cannot be
+        computed are ``None``, never NaN.
     """
     a, b = np.asarray(residual, dtype=float), np.asarray(no_residual, dtype=float)
     if a.shape != b.shape or a.ndim != 1:
@@ -110,17 +157,19 @@ def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: i
         return out
     out["fraction_residual_lower"] = float(np.mean(d < 0))
     out["median_difference"] = float(np.median(d))
-    boot = np.median(d[rng.integers(0, d.size, size=(n_boot, d.size))], axis=1)
-    out["ci_low"], out["ci_high"] = (float(v) for v in np.percentile(boot, [2.5, 97.5]))
+    out["ci_low"], out["ci_high"], ci_note = bootstrap_median_ci(a, b, rng, n_boot)
+    notes = [ci_note] if ci_note else []
     if np.all(d == 0):
-        out["wilcoxon_p"], out["note"] = 1.0, "all differences zero"
+        out["wilcoxon_p"] = 1.0
+        out["note"] = "; ".join(["all differences zero", *notes])
         return out
     from scipy.stats import wilcoxon
 
     p = float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
     out["wilcoxon_p"] = p if math.isfinite(p) else None
     if d.size < 6:
-        out["note"] = f"n = {d.size}: p cannot fall below {2.0 ** (1 - np.count_nonzero(d)):.3g}"
+        notes.insert(0, f"n = {d.size}: p cannot fall below {2.0 ** (1 - np.count_nonzero(d)):.3g}")
+    out["note"] = "; ".join(notes)
     return out
 
 
