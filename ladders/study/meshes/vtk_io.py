@@ -170,6 +170,3 @@ def write_vtk(path, vertices, faces, binary: bool = False) -> Path:
         tri = "\n".join(" ".join(str(i) for i in row) for row in cells)
         path.write_text(head + pts + "\n" + cell_head + tri + "\n")
     return path
-
-
-# --------------------------------------------------------------------------- meshes
