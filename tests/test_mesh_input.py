@@ -177,6 +177,8 @@ def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
     meshio.write(template, meshio.Mesh(COHORT.atlas, [("triangle", COHORT.faces)]))
     (data / "scans" / "spare.vtu").write_bytes((data / "scans" / "frame0_0.vtu").read_bytes())
     (data / "volume.msh").write_text("$MeshFormat\n")
+    (data / "deep" / "deeper").mkdir(parents=True)
+    (data / "deep" / "deeper" / "other.ply").write_bytes(b"ply\n")  # never read nor hashed
     with pytest.warns(
         UnusedMeshFilesWarning,
         match=r"2 mesh file\(s\) not used: .*spare\.vtu \(not in cohort\.csv\); .*volume\.msh \(format",
@@ -192,6 +194,13 @@ def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
     _same_results(_results(out), reference)
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["data"]["source"] == "table" and manifest["data"]["atlas"] == str(template)
+    # Exactly the files the table names (and the atlas and the table) are hashed: not the
+    # unused spare.vtu, volume.msh nor anything deeper under the table's folder.
+    named = [
+        data / "scans" / f"frame{t}_{i}.{e}" for i in range(2) for t, e in ((0, "vtu"), (9, "vtp"))
+    ]
+    expected = {str(p.resolve()) for p in (*named, data / "cohort.csv", template)}
+    assert set(manifest["input_files"]) == expected
     # Without --atlas the table's folder must hold atlas.<ext>.
     assert main([*args[:3], "-o", str(out), *FAST]) == 2
     assert "no atlas file 'atlas.<ext>' next to the table" in capsys.readouterr().err

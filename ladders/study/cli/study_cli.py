@@ -276,17 +276,12 @@ def _note_pairs_without_meshes(outcome) -> None:
         )
 
 
-def _input_files(args) -> list | None:
-    """Files the cohort was read from (hashed into the manifest); ``None`` for the built-in one."""
-    from ..running.runner import mesh_files
-
-    files = []
-    if args.meshes is not None:
-        files += mesh_files(args.meshes)
+def _input_files(args, cohort) -> list | None:
+    """The files the cohort was read from, exactly (hashed into the manifest): the table
+    with ``--cohort``, the atlas and the subjects' meshes; ``None`` for the built-in one."""
+    files = list(cohort.input_files)
     if args.cohort is not None:
-        files += [Path(args.cohort), *mesh_files(Path(args.cohort).parent)]
-    if args.atlas is not None:
-        files.append(Path(args.atlas))
+        files.append(Path(args.cohort))
     return sorted({Path(f).resolve() for f in files}) or None
 
 
@@ -331,7 +326,7 @@ def _run_one(args, cohort, description, config, output: Path):
             progress=not args.no_progress,
             data_description=description,
             meshes=not args.no_meshes,
-            input_files=_input_files(args),
+            input_files=_input_files(args, cohort),
         )
     _note_recomputed(outcome)
     if outcome.skipped:

@@ -11,6 +11,7 @@ table (:func:`ladders.study.cohort.read_cohort_table`) or the synthetic generato
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,13 +32,15 @@ class Subject:
 
     ``parameters`` holds whatever produced the shapes, e.g. the
     :class:`ladders.study.cohort.SubjectParameters` of a synthetic subject
-    (``None`` for meshes read from files).
+    (``None`` for meshes read from files); ``files`` the ED and ES files the
+    shapes were read from (empty for generated shapes).
     """
 
     name: str
     ed: np.ndarray
     es: np.ndarray
     parameters: Any = None
+    files: tuple = ()
 
 
 @dataclass
@@ -54,12 +57,15 @@ class Cohort:
         Per-subject end-diastole ``S`` and end-systole ``S'`` vertices, ``(k, 3)`` each.
     source : str
         Where the cohort comes from (generator call or folder).
+    atlas_file : Path or None
+        The file the atlas was read from (None for a generated atlas).
     """
 
     atlas: np.ndarray
     faces: np.ndarray
     subjects: list[Subject] = field(default_factory=list)
     source: str = ""
+    atlas_file: Path | None = None
 
     def __post_init__(self):
         self.atlas = _vertices(self.atlas, "atlas")
@@ -112,9 +118,16 @@ class Cohort:
             else np.empty((0, self.n_vertices, 3))
         )
 
+    @property
+    def input_files(self) -> list[Path]:
+        """The files the cohort was read from: the atlas, then each subject's ED and ES."""
+        atlas = [self.atlas_file] if self.atlas_file is not None else []
+        return [Path(p) for p in (*atlas, *(f for s in self.subjects for f in s.files))]
+
     def head(self, n: int) -> Cohort:
         """The cohort restricted to its first ``n`` subjects."""
-        return Cohort(self.atlas, self.faces, list(self.subjects[:n]), self.source)
+        subjects = list(self.subjects[:n])
+        return Cohort(self.atlas, self.faces, subjects, self.source, self.atlas_file)
 
 
 def _vertices(x, name: str) -> np.ndarray:

@@ -135,8 +135,8 @@ def assemble_cohort(atlas_path: Path, entries: dict, source: str) -> Cohort:
                     "(every mesh must share the atlas's triangulation and vertex order)"
                 )
             shapes[phase] = v
-        subjects.append(Subject(name, shapes["ed"], shapes["es"]))
-    return Cohort(atlas_v, faces, subjects, source=source)
+        subjects.append(Subject(name, shapes["ed"], shapes["es"], files=(slot["ed"], slot["es"])))
+    return Cohort(atlas_v, faces, subjects, source=source, atlas_file=atlas_path)
 
 
 def read_cohort(folder, atlas=None) -> Cohort:

@@ -13,13 +13,12 @@ import numpy as np
 
 from ..cohort import Subject
 from ..errors import CohortError
-from ..meshes.mesh_io import MESH_EXTENSIONS
 from .pipeline import StudyConfig, compute_pair
 from .provenance import write_manifest
 from .results import FailedPair, PairResult, SubjectResults
 from .store import PairStore, array_digest, atomic_write_text, config_hash, validate_subject_name
 
-__all__ = ["StudyOutcome", "run_study", "configuration_id", "mesh_files"]
+__all__ = ["StudyOutcome", "run_study", "configuration_id"]
 
 _CLAIM_POLL_S = 0.5  # how often a run checks pairs claimed by another run
 
@@ -73,11 +72,6 @@ def configuration_id(config: StudyConfig, atlas, faces) -> tuple[str, dict]:
     cfg.pop("alpha2")
     shared = {"config": cfg, "atlas": array_digest(atlas), "faces": array_digest(faces)}
     return config_hash(shared), shared
-
-
-def mesh_files(folder) -> list[Path]:
-    """Mesh files under ``folder`` (recursively, sorted), for the manifest's hashes."""
-    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() in MESH_EXTENSIONS)
 
 
 def _pair_hash(config_id: str, subject: Subject, alpha2: float) -> str:
