@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 
 from .cli_types import (
+    EXIT_BROKEN_PIPE,
     EXIT_INTERNAL,
     EXIT_INTERRUPTED,
     EXIT_USAGE,
@@ -51,6 +53,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         command = f"symladders {args.command}"
         return args.run(args)
+    except BrokenPipeError:
+        return _closed_pipe()
     except UsageError as exc:
         return _fail(str(exc), EXIT_USAGE)
     except (CohortError, ManifoldError) as exc:
@@ -70,6 +74,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"full traceback in {log}",
             EXIT_INTERNAL,
         )
+
+
+def _closed_pipe() -> int:
+    """The reader of standard output went away (``symladders study | head``): end
+    quietly, as standard tools do, with the status of a SIGPIPE (128 + 13)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())  # no second error when Python flushes at exit
+    return EXIT_BROKEN_PIPE
 
 
 def _first_line(exc: BaseException) -> str:

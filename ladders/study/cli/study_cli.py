@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .cli_types import (
+    DefaultsFormatter,
     UsageError,
     check_grid_sigma,
     existing_folder,
@@ -30,6 +31,7 @@ FULL_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
 DEFAULT_ALPHA2 = FULL_ALPHA2
 DEFAULT_SUBJECTS = 20
 FULL_SUBJECTS = 138
+DEFAULT_VERTICES = 1009
 
 
 def _floats(text: str) -> tuple[float, ...]:
@@ -56,7 +58,7 @@ def add_study_parser(sub) -> None:
             "they finish; rerunning with the same output folder resumes and computes only the "
             "missing (subject, alpha^2) pairs."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+        formatter_class=DefaultsFormatter,
     )
     _add_input_arguments(p)
     _add_model_arguments(p)
@@ -99,7 +101,9 @@ def _add_input_arguments(p) -> None:
         "--subjects",
         type=positive_int,
         default=None,
-        help=f"number of subjects to use (default {DEFAULT_SUBJECTS} built-in, all with --meshes)",
+        help=f"number of subjects: {DEFAULT_SUBJECTS} of the built-in cohort ({FULL_SUBJECTS} with "
+        "--full), or the first N of --meshes or --cohort (default: all of them; more than "
+        "they hold is an error)",
     )
     p.add_argument(
         "--full",
@@ -107,10 +111,18 @@ def _add_input_arguments(p) -> None:
         help=f"the paper's setting: {FULL_SUBJECTS} subjects and the 7-value alpha^2 sweep",
     )
     p.add_argument(
-        "--alpha2", type=_floats, default=None, help="comma-separated alpha^2 values (eq. 3)"
+        "--alpha2",
+        type=_floats,
+        default=None,
+        help="comma-separated alpha^2 values (eq. 3); default: "
+        f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)}",
     )
     p.add_argument(
-        "--vertices", type=positive_int, default=1000, help="vertices of the built-in meshes"
+        "--vertices",
+        type=positive_int,
+        default=DEFAULT_VERTICES,
+        help="vertices of the built-in meshes, rounded to their grid of 1 + n_longitude x "
+        "n_latitude vertices (the count used is printed)",
     )
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
 
@@ -199,6 +211,7 @@ def _add_run_arguments(p) -> None:
 
 def _load_cohort(args):
     from ..cohort import (
+        MissingAtlasError,
         UnusedMeshFilesWarning,
         make_synthetic_cohort,
         read_cohort,
@@ -211,12 +224,17 @@ def _load_cohort(args):
     if args.meshes is not None or args.cohort is not None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", UnusedMeshFilesWarning)
-            if args.meshes is not None:
-                cohort = read_cohort(args.meshes, atlas=args.atlas)
-                description = {"source": "folder", "folder": str(args.meshes.resolve())}
-            else:
-                cohort = read_cohort_table(args.cohort, atlas=args.atlas)
-                description = {"source": "table", "table": str(args.cohort.resolve())}
+            try:
+                if args.meshes is not None:
+                    cohort = read_cohort(args.meshes, atlas=args.atlas)
+                    description = {"source": "folder", "folder": str(args.meshes.resolve())}
+                else:
+                    cohort = read_cohort_table(args.cohort, atlas=args.atlas)
+                    description = {"source": "table", "table": str(args.cohort.resolve())}
+            except MissingAtlasError as exc:
+                raise UsageError(
+                    f"symladders study: error: {exc.with_hint('--atlas PATH')}"
+                ) from None
         for w in caught:  # one readable line each, not a source location
             if issubclass(w.category, UnusedMeshFilesWarning):
                 print(f"symladders study: warning: {w.message}", file=sys.stderr)
@@ -224,6 +242,12 @@ def _load_cohort(args):
                 warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         if args.atlas is not None:
             description["atlas"] = str(args.atlas.resolve())
+        if n is not None and n > len(cohort):
+            where = "--meshes folder" if args.meshes is not None else "--cohort table"
+            raise UsageError(
+                f"symladders study: error: --subjects {n}: the {where} holds only "
+                f"{len(cohort)} subject(s) (leave --subjects out to use all of them)"
+            )
         if n is not None:
             cohort = cohort.head(n)
     else:

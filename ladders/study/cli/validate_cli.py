@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .cli_types import nonnegative_int, output_folder
+from .cli_types import DefaultsFormatter, nonnegative_int, output_folder
 
 __all__ = ["add_validate_parser", "run_validate_command"]
 
@@ -18,6 +18,7 @@ def add_validate_parser(sub) -> None:
             "print errors and measured convergence slopes, and write validation.json, "
             "validation.md and convergence.png to the output folder."
         ),
+        formatter_class=DefaultsFormatter,
     )
     p.add_argument(
         "--output",

@@ -8,7 +8,7 @@
 - :mod:`.benchmark_shapes`: the registration benchmark's shapes (:func:`bent_ellipsoid`).
 """
 
-from ..errors import CohortError, MeshFolderError
+from ..errors import CohortError, MeshFolderError, MissingAtlasError
 from .benchmark_shapes import bent_ellipsoid
 from .cohort import Cohort, Subject
 from .cohort_statistics import CohortStatistics, cohort_statistics
@@ -26,6 +26,7 @@ __all__ = [
     "Cohort",
     "CohortError",
     "MeshFolderError",
+    "MissingAtlasError",
     "Subject",
     "SubjectParameters",
     "SyntheticLVModel",

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import MeshFolderError
+from ..errors import MeshFolderError, MissingAtlasError
 from ..meshes.mesh_io import (
     MESH_EXTENSIONS,
     OTHER_MESH_EXTENSIONS,
@@ -170,9 +170,8 @@ def read_cohort(folder, atlas=None) -> Cohort:
     found_atlas, entries, other = _scan(folder)
     atlas_path = Path(atlas) if atlas is not None else found_atlas
     if atlas_path is None:
-        raise MeshFolderError(
-            f"{folder}: no atlas file 'atlas.<ext>' ({', '.join(MESH_EXTENSIONS)}); "
-            "name one with atlas=PATH (--atlas PATH)"
+        raise MissingAtlasError(
+            f"{folder}: no atlas file 'atlas.<ext>' ({', '.join(MESH_EXTENSIONS)})"
         )
     if not entries:
         raise MeshFolderError(f"{folder}: no subject files '<name>_ed.<ext>' / '<name>_es.<ext>'")
