@@ -61,6 +61,21 @@ def test_outputs_are_written_and_readable(study):
     assert len(paired) - 1 == len(ALPHA2) * 5
 
 
+def test_fig5b_shows_the_median_subject_without_white_margins(study):
+    from matplotlib.image import imread
+
+    outcome, paths = study
+    ase = {r.subject: r.at(1.0).measure("residual", "ase") for r in outcome.results}
+    ranked = sorted(ase, key=ase.get)
+    assert paths["maps_subject"] == ranked[len(ranked) // 2]  # 3 subjects: the middle one
+    image = imread(paths["maps_png"])[..., :3]
+    ink = np.argwhere((image < 0.97).any(axis=2))  # pixels that are not white
+    (top, left), (bottom, right) = ink.min(axis=0), ink.max(axis=0)
+    height, width = image.shape[:2]
+    assert top <= 0.04 * height and bottom >= 0.96 * height  # margins under 4 %
+    assert left <= 0.04 * width and right >= 0.96 * width
+
+
 def test_cli_exit_status_counts_failed_subjects(tmp_path, monkeypatch, capsys):
     import ladders.study.running.runner as runner_mod
 

@@ -140,3 +140,22 @@ def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
     assert "3 stopped at the iteration limit; 20 iterations on average" in text
     assert "(40 flow passes)" in text
     assert "largest final gradient 5e-07" in text
+
+
+def test_terminal_table_fits_100_columns_and_names_the_unit():
+    from ladders.study.reporting import summarize, terminal_summary
+
+    alphas = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
+    results = []
+    for i in range(20):
+        shift = 1e-5 * (i + 1.2345)  # long numbers: 1.23e-05 / 3.00001
+        errors = {"residual": (shift,) * 4, "no_residual": (123.456 + shift,) * 4}
+        ase = {"pole_ladder_residual": shift, "pole_ladder_no_residual": 12.3456, "fanning": 0.5}
+        pairs = [fake_pair(f"s{i}", a, errors, ase, (5.0345, 33.333, 0.299, True)) for a in alphas]
+        results.append(fake_subject(f"s{i}", pairs))
+    text = terminal_summary(summarize(results), "mm (per-vertex RMS)", 20)
+    lines = text.splitlines()
+    assert max(len(line) for line in lines) <= 100
+    assert "per-vertex RMS" in lines[0] and "20 subjects" in lines[0]
+    assert sum(line.startswith("0.01 ") for line in lines) == 2  # one row per table
+    assert "ASE fanning" in text and "Inverse cons." in text
