@@ -147,12 +147,16 @@ def test_finegrid_policy_halves_the_spacing():
 
 def test_study_preflight_budget_covers_the_finer_grid():
     from ladders.study.cli.cli_types import check_grid_sigma
+    from manifolds.lddmm import RegistrationSettings
+
+    def settings(sigma, policy):
+        return RegistrationSettings(sigma=sigma, control_points=policy)
 
     shape = np.random.default_rng(0).uniform(0.0, 100.0, (50, 3))  # a 100 mm box
-    check_grid_sigma(shape, 5.0, "grid")  # 21^3 = 9,261 points: within the budget
+    check_grid_sigma(shape, settings(5.0, "grid"))  # 21^3 = 9,261 points: within the budget
     with pytest.raises(ManifoldError, match="sigma"):
-        check_grid_sigma(shape, 5.0, "finegrid")  # spacing 2.5 mm: 41^3 = 68,921 points
-    check_grid_sigma(shape, 0.01, "dense")  # no grid, nothing to check
+        check_grid_sigma(shape, settings(5.0, "finegrid"))  # spacing 2.5 mm: 41^3 = 68,921
+    check_grid_sigma(shape, settings(0.01, "dense"))  # no grid, nothing to check
 
 
 def test_dense_means_control_points_at_the_template_vertices_everywhere():

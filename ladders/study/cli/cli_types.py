@@ -229,14 +229,21 @@ def log_internal_error(exc: BaseException, output: str | None) -> Path:
     return Path(name)
 
 
-def check_grid_sigma(points, sigma: float, control_points: str) -> None:
+def check_grid_sigma(points, settings) -> None:
     """Before a study starts: refuse a ``--sigma`` whose control-point grid exceeds the budget.
+
+    Parameters
+    ----------
+    points : array, shape (k, 3)
+        The atlas.
+    settings : manifolds.lddmm.RegistrationSettings
+        The study's registration settings (kernel width, policy, budget).
 
     Raises :class:`~manifolds.errors.ManifoldError` (naming sigma, the shape's
     extent and the count) for the policies that build a grid (``"grid"``, ``"finegrid"``).
     """
-    from manifolds.lddmm.control_points import MAX_CONTROL_POINTS, check_grid_budget, grid_spacing
+    from manifolds.lddmm.control_points import check_grid_budget, grid_spacing
 
-    spacing = grid_spacing(control_points, sigma)
+    spacing = grid_spacing(settings.control_points_policy, settings.sigma)
     if spacing is not None:
-        check_grid_budget(points, spacing, MAX_CONTROL_POINTS)
+        check_grid_budget(points, spacing, settings.max_control_points)

@@ -413,17 +413,19 @@ def run_study_command(args) -> int:
     """
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
-    check_grid_sigma(cohort.atlas, args.sigma, args.control_points)
     output = Path(args.output)
     models = ("lddmm", "svf") if args.deformation == "both" else (args.deformation,)
     if args.optimize_control_points and "svf" in models:
         raise UsageError(
             "symladders study: --optimize-control-points works with --deformation lddmm only"
         )
+    configs = {model: _config(args, model) for model in models}
+    for config in configs.values():  # the registration settings are the whole configuration
+        check_grid_sigma(cohort.atlas, config.registration)
     outcomes = {}
-    for model in models:
+    for model, config in configs.items():
         folder = output / model if len(models) > 1 else output
-        outcomes[model] = _run_one(args, cohort, description, _config(args, model), folder)
+        outcomes[model] = _run_one(args, cohort, description, config, folder)
     if len(models) > 1:
         print("Comparison:", _write_comparison(outcomes, output))
     print(f"Total wall time {time.perf_counter() - start:.1f} s")
