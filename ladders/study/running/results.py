@@ -202,7 +202,18 @@ class TransportResult:
 
 
 @dataclass(frozen=True)
-class PairResult:
+class _Pair:
+    """What names a pair: its subject and ``alpha^2``."""
+
+    subject: str
+    alpha2: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "alpha2", float(self.alpha2))
+
+
+@dataclass(frozen=True)
+class PairResult(_Pair):
     """The result of one subject at one ``alpha^2`` (computed by
     :func:`ladders.study.running.pipeline.compute_pair`).
 
@@ -230,8 +241,6 @@ class PairResult:
         The kernel backend that ran.
     """
 
-    subject: str
-    alpha2: float
     settings_key: str
     deformation: str
     unit: str
@@ -246,7 +255,7 @@ class PairResult:
     status = "ok"
 
     def __post_init__(self):
-        object.__setattr__(self, "alpha2", float(self.alpha2))
+        super().__post_init__()
         object.__setattr__(self, "errors", tuple(self.errors))
         object.__setattr__(self, "transports", tuple(self.transports))
         object.__setattr__(self, "las_subject", _floats(self.las_subject))
@@ -298,19 +307,14 @@ class PairResult:
 
 
 @dataclass(frozen=True)
-class FailedPair:
+class FailedPair(_Pair):
     """A (subject, ``alpha^2``) whose computation raised: its error and traceback."""
 
-    subject: str
-    alpha2: float
     error: str
     traceback: str
     seconds: float
 
     status = "failed"
-
-    def __post_init__(self):
-        object.__setattr__(self, "alpha2", float(self.alpha2))
 
 
 @dataclass(frozen=True)
