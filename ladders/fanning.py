@@ -91,6 +91,23 @@ class FanningResult:
     norm_drift: float
 
 
+def _checked_inputs(control_points, geodesic_momenta, tangent):
+    """``(c, mu, w)`` as finite float arrays of one shape ``(n_cp, d)``."""
+    c = check_finite(as_float_array(control_points, "control_points"), "control_points")
+    if c.ndim != 2 or c.shape[0] == 0:
+        raise ManifoldError(f"control_points: expected shape (n_cp, d), got {c.shape}")
+    mu = as_float_array(geodesic_momenta, "geodesic_momenta")
+    w = as_float_array(tangent, "tangent")
+    for name, arr in (("geodesic_momenta", mu), ("tangent", w)):
+        if arr.shape != c.shape:
+            raise ValueError(
+                f"{name}: expected shape {c.shape} (that of control_points), got {arr.shape}"
+            )
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name}: contains NaN or infinite values")
+    return c, mu, w
+
+
 def fanning_scheme(
     space,
     control_points: np.ndarray,
@@ -135,18 +152,7 @@ def fanning_scheme(
     max_norm_drift = check_float(max_norm_drift, "max_norm_drift", minimum=0.0, strict=True)
     if epsilon is not None:
         epsilon = check_float(epsilon, "epsilon", minimum=0.0, strict=True)
-    c = check_finite(as_float_array(control_points, "control_points"), "control_points")
-    if c.ndim != 2 or c.shape[0] == 0:
-        raise ManifoldError(f"control_points: expected shape (n_cp, d), got {c.shape}")
-    mu = as_float_array(geodesic_momenta, "geodesic_momenta")
-    w = as_float_array(tangent, "tangent")
-    for name, arr in (("geodesic_momenta", mu), ("tangent", w)):
-        if arr.shape != c.shape:
-            raise ValueError(
-                f"{name}: expected shape {c.shape} (that of control_points), got {arr.shape}"
-            )
-        if not np.isfinite(arr).all():
-            raise ValueError(f"{name}: contains NaN or infinite values")
+    c, mu, w = _checked_inputs(control_points, geodesic_momenta, tangent)
     h = 1.0 / n_steps
     eps = h if epsilon is None else float(epsilon)
 

@@ -8,8 +8,10 @@ Sub-packages, by concern:
   (:func:`make_synthetic_cohort`), mesh folders (:func:`read_cohort`), cohort tables
   (:func:`read_cohort_table`), cohort figures and the registration benchmark's shapes
   (:func:`bent_ellipsoid`);
-- :mod:`.running`: the study's computation (:class:`StudyConfig`, :func:`run_subject`),
-  the runner with its resumable store (:func:`run_study`) and the manifest;
+- :mod:`.running`: the study's computation (:class:`StudyConfig`, :func:`compute_pair`,
+  the one computation of a (subject, ``alpha^2``) pair, and :func:`run_subject`), its
+  typed results (:class:`PairResult`, :class:`SubjectResults`), the runner with its
+  resumable store (:func:`run_study`) and the manifest;
 - :mod:`.reporting`: the report (:func:`summarize`, :func:`write_report`,
   :func:`tidy_rows`, :func:`paired_statistics`), the figures and the LDDMM-SVF
   comparison;
@@ -57,7 +59,17 @@ from .reporting import (
     tidy_rows,
     write_report,
 )
-from .running import ERROR_NAMES, VARIANTS, StudyConfig, compute_pair, run_study, run_subject
+from .running import (
+    ERROR_NAMES,
+    VARIANTS,
+    FailedPair,
+    PairResult,
+    StudyConfig,
+    SubjectResults,
+    compute_pair,
+    run_study,
+    run_subject,
+)
 
 __all__ = [
     "Cohort",
@@ -93,6 +105,9 @@ __all__ = [
     "run_subject",
     "run_study",
     "compute_pair",
+    "PairResult",
+    "FailedPair",
+    "SubjectResults",
     "tidy_rows",
     "paired_comparison",
     "paired_statistics",
