@@ -100,23 +100,20 @@ class Cohort:
         """Subject names, in cohort order."""
         return [s.name for s in self.subjects]
 
+    def _stacked(self, phase: str) -> np.ndarray:
+        if not self.subjects:
+            return np.empty((0, self.n_vertices, 3))
+        return np.stack([getattr(s, phase) for s in self.subjects])
+
     @property
     def ed(self) -> np.ndarray:
         """End-diastole shapes stacked, shape ``(n, k, 3)``."""
-        return (
-            np.stack([s.ed for s in self.subjects])
-            if self.subjects
-            else np.empty((0, self.n_vertices, 3))
-        )
+        return self._stacked("ed")
 
     @property
     def es(self) -> np.ndarray:
         """End-systole shapes stacked, shape ``(n, k, 3)``."""
-        return (
-            np.stack([s.es for s in self.subjects])
-            if self.subjects
-            else np.empty((0, self.n_vertices, 3))
-        )
+        return self._stacked("es")
 
     @property
     def input_files(self) -> list[Path]:
