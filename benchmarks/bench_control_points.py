@@ -32,8 +32,8 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from ladders import symmetry_errors  # noqa: E402
-from ladders.study.pipeline import StudyConfig, make_space  # noqa: E402
-from ladders.study.synthetic_lv import make_synthetic_cohort  # noqa: E402
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort  # noqa: E402
+from ladders.study.running.pipeline import StudyConfig, make_space  # noqa: E402
 from manifolds import ResidualAugmented  # noqa: E402
 from manifolds.errors import ConvergenceWarning  # noqa: E402
 

@@ -25,7 +25,7 @@ TARGET_MB = 1024.0
 
 
 def run_case(policy: str, backend: str, iterations: int) -> dict:
-    from ladders.study.benchmark_shapes import bent_ellipsoid
+    from ladders.study.cohort.benchmark_shapes import bent_ellipsoid
     from manifolds import LDDMMLandmarks
     from manifolds.lddmm.kernels import numba_available
 

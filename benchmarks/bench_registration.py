@@ -34,7 +34,7 @@ CASES = {
 
 
 def problem(subdivisions: int, scale: float = 1.0):
-    from ladders.study.benchmark_shapes import bent_ellipsoid
+    from ladders.study.cohort.benchmark_shapes import bent_ellipsoid
 
     template, target, _ = bent_ellipsoid(subdivisions, twist=0.4 * scale, bend=0.2 * scale)
     return template, target

@@ -2,7 +2,7 @@
 
 The template is an icosphere scaled to semi-axes (1, 0.7, 0.5) (642 vertices by
 default), the target its bent and twisted copy
-(:func:`ladders.study.benchmark_shapes.bent_ellipsoid`); grid control points of
+(:func:`ladders.study.cohort.benchmark_shapes.bent_ellipsoid`); grid control points of
 spacing sigma = 0.5 (45 points), alpha = 0.02, 10 time steps. Each method
 registers to convergence (at most ``--max-iter`` L-BFGS-B iterations) from the
 same linearised start; reported: best wall time of ``--repeats`` runs,
@@ -20,7 +20,7 @@ import argparse
 import time
 import warnings
 
-from ladders.study.benchmark_shapes import bent_ellipsoid
+from ladders.study.cohort.benchmark_shapes import bent_ellipsoid
 from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks
 
 SIGMA, ALPHA, N_STEPS = 0.5, 0.02, 10

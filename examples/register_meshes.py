@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ladders.study.benchmark_shapes import bent_ellipsoid  # noqa: E402
+from ladders.study.cohort.benchmark_shapes import bent_ellipsoid  # noqa: E402
 from manifolds.lddmm import LDDMMLandmarks  # noqa: E402
 
 

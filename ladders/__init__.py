@@ -12,7 +12,13 @@ which this package never imports.
 """
 
 from .convergence import ConvergenceCurve, ladder_convergence, loglog_slope
-from .fanning import FanningResult, fanning_scheme, fanning_transport
+from .fanning import (
+    FanningResult,
+    MomentumFlowSpace,
+    NoMomentumFlowError,
+    fanning_scheme,
+    fanning_transport,
+)
 from .pole_ladder import pole_ladder
 from .rungs import LadderTrajectory
 from .schild_ladder import schild_ladder
@@ -20,7 +26,6 @@ from .symmetry_errors import (
     SymmetryErrors,
     centrality_error,
     involutivity_error,
-    l2_distance,
     midpoint_distance,
     symmetry_errors,
     transvectivity_error,
@@ -34,7 +39,6 @@ __all__ = [
     "SymmetryErrors",
     "centrality_error",
     "involutivity_error",
-    "l2_distance",
     "midpoint_distance",
     "symmetry_errors",
     "transvectivity_error",
@@ -42,6 +46,8 @@ __all__ = [
     "ladder_convergence",
     "loglog_slope",
     "FanningResult",
+    "MomentumFlowSpace",
+    "NoMomentumFlowError",
     "fanning_scheme",
     "fanning_transport",
     "NABLA_R_COEFFICIENTS",

@@ -30,7 +30,6 @@ from manifolds.connection import Connection
 from manifolds.point_distance import point_distance
 
 __all__ = [
-    "l2_distance",
     "midpoint_distance",
     "centrality_error",
     "involutivity_error",
@@ -40,15 +39,6 @@ __all__ = [
 ]
 
 Distance = Callable[[np.ndarray, np.ndarray], np.ndarray] | str
-
-
-def l2_distance(space) -> Callable:
-    """Frobenius norm over the point axes of ``space``: ``(a, b) -> ||a - b||_F``.
-
-    Broadcasts over batch axes; ``point_distance("frobenius", space.point_shape)``.
-    """
-    _check_space(space)
-    return point_distance("frobenius", space.point_shape)
 
 
 def _check_space(space) -> None:

@@ -19,6 +19,7 @@ from .validation import (
     check_batch_shapes,
     check_finite,
     check_finite_result,
+    check_int,
     check_shape,
 )
 
@@ -48,9 +49,7 @@ class ConstantCurvatureQuadric(RiemannianManifold):
     sectional_curvature = 1.0
 
     def __init__(self, n: int):
-        if isinstance(n, bool) or int(n) != n or n < 1:
-            raise ValueError(f"{type(self).__name__}: n must be a positive integer, got {n!r}")
-        self.dim = int(n)
+        self.dim = check_int(n, f"{type(self).__name__}: n", minimum=1)
         self.point_shape = (self.dim + 1,)
 
     def __repr__(self) -> str:

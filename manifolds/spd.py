@@ -18,6 +18,7 @@ from .validation import (
     check_finite,
     check_finite_result,
     check_float,
+    check_int,
     check_n_samples,
     check_rng,
     check_shape,
@@ -75,9 +76,7 @@ class SPDMatrices(RiemannianManifold):
     supports_batch = True
 
     def __init__(self, n: int):
-        if isinstance(n, bool) or int(n) != n or n < 1:
-            raise ValueError(f"SPDMatrices: n must be a positive integer, got {n!r}")
-        self.n = int(n)
+        self.n = check_int(n, "SPDMatrices: n", minimum=1)
         self.dim = self.n * (self.n + 1) // 2
         self.point_shape = (self.n, self.n)
 

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
 from ladders.study.area_strain import area_strain, area_strain_error, cell_areas
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
 from manifolds.errors import ManifoldError
 
 COHORT = make_synthetic_cohort(n_subjects=3, grid=(12, 7), seed=11)

@@ -393,3 +393,13 @@ def test_api_bad_input_raises_named_error(call, exc, name):
     with pytest.raises(exc) as info:
         call()
     assert name in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("value", ["a", 0, -1, 1.5, True, None])
+@pytest.mark.parametrize("cls", ["Hypersphere", "Hyperbolic", "SPDMatrices"])
+def test_dimension_errors_name_the_class_and_the_argument(cls, value):
+    import manifolds
+
+    with pytest.raises(ValueError, match=rf"^{cls}: n: expected an integer >= 1, got ") as info:
+        getattr(manifolds, cls)(value)
+    assert repr(value) in str(info.value)

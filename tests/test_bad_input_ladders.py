@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from ladders import (
+    NoMomentumFlowError,
     centrality_error,
     fanning_scheme,
     involutivity_error,
@@ -16,7 +17,7 @@ from ladders import (
     schild_ladder,
     symmetry_errors,
 )
-from manifolds import Euclidean, GaussianKernel, Hypersphere, ManifoldError
+from manifolds import Euclidean, GaussianKernel, Hypersphere, LDDMMLandmarks, ManifoldError
 
 NAN = np.nan
 
@@ -36,7 +37,8 @@ def nan_like(x):
 E3, S2 = Euclidean(3), Hypersphere(2)
 X, Y, U = np.zeros(3), np.ones(3), np.array([0.0, 1.0, 0.0])
 CP = np.zeros((3, 2))
-KER = GaussianKernel(1.0, backend="numpy")
+FLOW = LDDMMLandmarks(3, 2, sigma=1.0, alpha=0.0, kernel_backend="numpy")  # a flow of momenta
+KER = GaussianKernel(1.0, backend="numpy")  # a kernel alone is not a space
 
 
 def ladder_cases():
@@ -121,45 +123,51 @@ def ladder_cases():
         ),
         (
             "fanning-n_steps-nan",
-            lambda: fanning_scheme(KER, CP, CP, CP, n_steps=NAN),
+            lambda: fanning_scheme(FLOW, CP, CP, CP, n_steps=NAN),
             ValueError,
             "n_steps",
         ),
         (
             "fanning-n_steps-zero",
-            lambda: fanning_scheme(KER, CP, CP, CP, n_steps=0),
+            lambda: fanning_scheme(FLOW, CP, CP, CP, n_steps=0),
             ValueError,
             "n_steps",
         ),
         (
             "fanning-epsilon",
-            lambda: fanning_scheme(KER, CP, CP, CP, epsilon=-1.0),
+            lambda: fanning_scheme(FLOW, CP, CP, CP, epsilon=-1.0),
             ValueError,
             "epsilon",
         ),
         (
             "fanning-drift",
-            lambda: fanning_scheme(KER, CP, CP, CP, max_norm_drift=0.0),
+            lambda: fanning_scheme(FLOW, CP, CP, CP, max_norm_drift=0.0),
             ValueError,
             "max_norm_drift",
         ),
         (
             "fanning-tangent-shape",
-            lambda: fanning_scheme(KER, CP, CP, np.zeros((4, 2))),
+            lambda: fanning_scheme(FLOW, CP, CP, np.zeros((4, 2))),
             ValueError,
             "tangent",
         ),
         (
             "fanning-momenta-nan",
-            lambda: fanning_scheme(KER, CP, np.full((3, 2), NAN), CP),
+            lambda: fanning_scheme(FLOW, CP, np.full((3, 2), NAN), CP),
             ValueError,
             "geodesic_momenta",
         ),
         (
             "fanning-control-points",
-            lambda: fanning_scheme(KER, np.zeros(3), CP, CP),
+            lambda: fanning_scheme(FLOW, np.zeros(3), CP, CP),
             ValueError,
             "control_points",
+        ),
+        (
+            "fanning-kernel-not-a-space",
+            lambda: fanning_scheme(KER, CP, CP, CP),
+            NoMomentumFlowError,
+            "fanning_scheme: space: expected a space with a flow of momenta",
         ),
         (
             "convergence-empty",

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ladders.study.cohort import Cohort, CohortError, Subject
-from ladders.study.synthetic_lv import (
+from ladders.study.cohort.synthetic_lv import (
     SubjectParameters,
     SyntheticLVModel,
     grid_shape,
@@ -211,7 +211,7 @@ def test_cohort_validation():
 
 def test_cohort_figures_match_real_ventricles_and_the_paper():
     """Mesh resolution, sizes, ejection fraction and distances of the default cohort."""
-    from ladders.study.cohort_statistics import cohort_statistics
+    from ladders.study.cohort.cohort_statistics import cohort_statistics
 
     stats = cohort_statistics(FULL)
     assert stats.n_vertices >= 1000 and stats.mean_edge <= 4.0
@@ -225,7 +225,7 @@ def test_cohort_figures_match_real_ventricles_and_the_paper():
 
 
 def test_cavity_volume_of_a_half_ellipsoid():
-    from ladders.study.cohort_statistics import boundary_vertices, cavity_volume
+    from ladders.study.cohort.cohort_statistics import boundary_vertices, cavity_volume
 
     model = SyntheticLVModel(bulge=(0.0, 0.0), harmonic_amplitude=0.0)
     theta, phi, faces = lv_grid(120, 70, model)

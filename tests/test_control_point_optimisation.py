@@ -129,7 +129,7 @@ def test_fanning_takes_the_tangents_control_points():
     # The tangent is carried to the geodesic's control points by matching its velocity there.
     c = geodesic.control_points
     w0 = space.kernel_solve(c, space.kernel.convolve(c, u.control_points, u.momenta))
-    ref = fanning_scheme(space.kernel, c, geodesic.momenta, w0, n_steps=5)
+    ref = fanning_scheme(space, c, geodesic.momenta, w0, n_steps=5)
     np.testing.assert_allclose(out.momenta, ref.momenta, atol=1e-12)
     # A tangent already at the geodesic's control points is used as it is.
     same = fanning_transport(space, s, t, LandmarkTangent(c, w0), n_steps=5)
@@ -149,31 +149,35 @@ def test_inverse_consistency_units():
 
 
 def test_study_runs_with_optimised_control_points_and_reports_in_the_chosen_unit():
-    from ladders.study.pipeline import StudyConfig, run_subject
-    from ladders.study.synthetic_lv import make_synthetic_cohort
+    from ladders.study.cohort import make_synthetic_cohort
+    from ladders.study.running import StudyConfig, compute_pair
 
     cohort = make_synthetic_cohort(n_subjects=1, n_vertices=241, seed=0)
-    args = (cohort.atlas, cohort.faces, cohort.subjects[0])
+    args = (cohort.atlas, cohort.faces, cohort.subjects[0], 1.0)
     k = cohort.atlas.shape[0]
     out = {}
     for distance in ("rms", "frobenius"):
         config = StudyConfig.build(alpha2=(1.0,), max_iter=20, distance=distance)
-        out[distance] = run_subject(config, *args)["alpha2"]["1.0"]
+        out[distance] = compute_pair(config, *args)
     for name in ("registration_error", "inverse_consistency"):
-        np.testing.assert_allclose(out["frobenius"][name], np.sqrt(k) * out["rms"][name], rtol=1e-9)
-    np.testing.assert_allclose(out["rms"]["registration_error"], out["rms"]["registration_rms"])
+        np.testing.assert_allclose(
+            out["frobenius"].measure("residual", name),
+            np.sqrt(k) * out["rms"].measure("residual", name),
+            rtol=1e-9,
+        )
+    np.testing.assert_allclose(out["rms"].registration.error, out["rms"].registration.rms)
     for measure in ("involutivity", "transvectivity"):
         np.testing.assert_allclose(
-            out["frobenius"]["residual"][measure],
-            np.sqrt(k) * out["rms"]["residual"][measure],
+            out["frobenius"].measure("residual", measure),
+            np.sqrt(k) * out["rms"].measure("residual", measure),
             rtol=1e-9,
         )
     config = StudyConfig.build(alpha2=(1.0,), max_iter=20, optimize_control_points=True)
-    optimised = run_subject(config, *args)["alpha2"]["1.0"]
+    optimised = compute_pair(config, *args)
     # On this subject optimising c lowers the registration error too (0.29 vs 0.35 mm).
-    assert optimised["registration_error"] < out["rms"]["registration_error"]
-    values = [optimised[v]["centrality"] for v in ("residual", "no_residual")]
-    assert np.all(np.isfinite(values)) and np.isfinite(optimised["fanning"]["ase"])
+    assert optimised.registration.error < out["rms"].registration.error
+    values = [optimised.measure(v, "centrality") for v in ("residual", "no_residual")]
+    assert np.all(np.isfinite(values)) and np.isfinite(optimised.transport("fanning").ase)
 
 
 def test_warm_start_from_a_tangent_with_control_points():

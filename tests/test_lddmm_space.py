@@ -146,10 +146,32 @@ def test_finegrid_policy_halves_the_spacing():
 
 
 def test_study_preflight_budget_covers_the_finer_grid():
-    from ladders.study.cli_types import check_grid_sigma
+    from ladders.study.cli.cli_types import check_grid_sigma
+    from manifolds.lddmm import RegistrationSettings
+
+    def settings(sigma, policy):
+        return RegistrationSettings(sigma=sigma, control_points=policy)
 
     shape = np.random.default_rng(0).uniform(0.0, 100.0, (50, 3))  # a 100 mm box
-    check_grid_sigma(shape, 5.0, "grid")  # 21^3 = 9,261 points: within the budget
+    check_grid_sigma(shape, settings(5.0, "grid"))  # 21^3 = 9,261 points: within the budget
     with pytest.raises(ManifoldError, match="sigma"):
-        check_grid_sigma(shape, 5.0, "finegrid")  # spacing 2.5 mm: 41^3 = 68,921 points
-    check_grid_sigma(shape, 0.01, "dense")  # no grid, nothing to check
+        check_grid_sigma(shape, settings(5.0, "finegrid"))  # spacing 2.5 mm: 41^3 = 68,921
+    check_grid_sigma(shape, settings(0.01, "dense"))  # no grid, nothing to check
+
+
+def test_dense_means_control_points_at_the_template_vertices_everywhere():
+    """shoot tells dense control points as the registration does (equal values, not
+    only the same array): a copy of the template is carried as the control points."""
+    from manifolds.lddmm.registration_problem import is_dense
+
+    rng = np.random.default_rng(7)
+    space = LDDMMLandmarks(12, 2, sigma=0.8, alpha=0.1, control_points="dense")
+    s = space.random_point(rng)
+    mu = 0.2 * space.random_tangent(s, rng)
+    d1, t1 = space.shoot(s, mu, return_trajectory=True)
+    d2, t2 = space.shoot(s, mu, control_points=s.copy(), return_trajectory=True)
+    assert is_dense(s, s.copy()) and len(t1[0]) == len(t2[0]) == 2  # states (c, mu)
+    np.testing.assert_array_equal(d1, d2)
+    grid = LDDMMLandmarks(12, 2, sigma=0.8, alpha=0.1, control_points="grid")
+    _, t3 = grid.shoot(s, np.zeros_like(grid.control_points(s)), return_trajectory=True)
+    assert len(t3[0]) == 3  # (c, mu, x): the template follows the flow of other points

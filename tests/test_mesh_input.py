@@ -1,5 +1,6 @@
 """Meshes from common tools: meshio formats, VTK XML PolyData, --atlas and --cohort tables."""
 
+import csv
 import json
 import shutil
 
@@ -8,15 +9,15 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import main
-from ladders.study.cohort_table import read_cohort_table
-from ladders.study.mesh_io import (
+from ladders.study.cohort import (
     MeshFolderError,
     UnusedMeshFilesWarning,
+    make_synthetic_cohort,
     read_cohort,
-    read_mesh,
+    read_cohort_table,
     write_cohort,
 )
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.meshes import read_mesh
 
 from .vtp_writer import vtp_bytes
 
@@ -107,7 +108,8 @@ def test_non_triangle_and_unreadable_files_name_the_file(tmp_path):
         read_mesh(tmp_path / "bad.vtu")
     (tmp_path / "bad.ply").write_bytes(b"nonsense")
     with pytest.raises(
-        MeshFolderError, match=r"bad\.ply: cannot be read as a mesh \(meshio: .*trimesh: "
+        MeshFolderError,
+        match=r"bad\.ply: cannot be read as a mesh \(not a PLY file: it starts with b'nonsense'",
     ):
         read_mesh(tmp_path / "bad.ply")
     (tmp_path / "grid.vtk").write_text(
@@ -119,11 +121,12 @@ def test_non_triangle_and_unreadable_files_name_the_file(tmp_path):
 
 
 def _results(out):
-    (config_folder,) = (p for p in (out / "results").iterdir() if p.is_dir())
-    return {
-        p.parent.name: json.loads(p.read_text())
-        for p in sorted(config_folder.glob("*/alpha2=1.0.json"))
-    }
+    """``{(subject, variant, measure): value}`` of the study's tidy table ``results.csv``."""
+    with open(out / "results.csv", newline="") as fh:
+        return {
+            (r["subject"], r["variant"], r["measure"]): float(r["value"])
+            for r in csv.DictReader(fh)
+        }
 
 
 @pytest.fixture(scope="module")
@@ -136,10 +139,11 @@ def reference(tmp_path_factory):
 
 
 def _same_results(got, ref):
-    assert sorted(got) == sorted(ref) == COHORT.names
-    for name in ref:
-        for variant in ("residual", "no_residual", "fanning"):
-            assert got[name][variant] == pytest.approx(ref[name][variant], rel=1e-9, abs=1e-12)
+    assert sorted({k[0] for k in got}) == sorted({k[0] for k in ref}) == COHORT.names
+    assert sorted(got) == sorted(ref)
+    assert {k[1] for k in ref} == {"residual", "no_residual", "fanning"}
+    for key, value in ref.items():
+        assert got[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
 
 
 @pytest.mark.parametrize("kind", ["meshio-vtk", "vtu", "vtp"])
@@ -173,6 +177,8 @@ def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
     meshio.write(template, meshio.Mesh(COHORT.atlas, [("triangle", COHORT.faces)]))
     (data / "scans" / "spare.vtu").write_bytes((data / "scans" / "frame0_0.vtu").read_bytes())
     (data / "volume.msh").write_text("$MeshFormat\n")
+    (data / "deep" / "deeper").mkdir(parents=True)
+    (data / "deep" / "deeper" / "other.ply").write_bytes(b"ply\n")  # never read nor hashed
     with pytest.warns(
         UnusedMeshFilesWarning,
         match=r"2 mesh file\(s\) not used: .*spare\.vtu \(not in cohort\.csv\); .*volume\.msh \(format",
@@ -188,6 +194,13 @@ def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
     _same_results(_results(out), reference)
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["data"]["source"] == "table" and manifest["data"]["atlas"] == str(template)
+    # Exactly the files the table names (and the atlas and the table) are hashed: not the
+    # unused spare.vtu, volume.msh nor anything deeper under the table's folder.
+    named = [
+        data / "scans" / f"frame{t}_{i}.{e}" for i in range(2) for t, e in ((0, "vtu"), (9, "vtp"))
+    ]
+    expected = {str(p.resolve()) for p in (*named, data / "cohort.csv", template)}
+    assert set(manifest["input_files"]) == expected
     # Without --atlas the table's folder must hold atlas.<ext>.
     assert main([*args[:3], "-o", str(out), *FAST]) == 2
     assert "no atlas file 'atlas.<ext>' next to the table" in capsys.readouterr().err
@@ -249,3 +262,41 @@ def test_mismatched_vtp_subject_is_refused_by_the_cli(tmp_path, capsys):
     (folder / "atlas.vtp").write_bytes(b"<VTKFile type='PolyData'><PolyData>")
     assert main(["study", "--meshes", str(folder), "-o", str(tmp_path / "o"), *FAST]) == 2
     assert "atlas.vtp: not a VTK XML file" in capsys.readouterr().err
+
+
+def test_readers_are_chosen_by_extension_and_header(tmp_path):
+    """One table of formats; the header picks the reader or refuses the file."""
+    from ladders.study.meshes import MESH_EXTENSIONS, WRITE_EXTENSIONS
+    from ladders.study.meshes.mesh_readers import MESH_FORMATS
+
+    assert MESH_EXTENSIONS == tuple(MESH_FORMATS)
+    assert set(WRITE_EXTENSIONS) == set(MESH_EXTENSIONS) - {".vtp"}
+    v, f = COHORT.atlas, COHORT.faces
+    # An OFF variant meshio does not read (COFF: a colour per vertex) goes to trimesh.
+    lines = ["COFF", f"{len(v)} {len(f)} 0"]
+    lines += [f"{x!r} {y!r} {z!r} 255 0 0 255" for x, y, z in v.tolist()]
+    lines += [f"3 {a} {b} {c}" for a, b, c in f.tolist()]
+    (tmp_path / "c.off").write_text("\n".join(lines) + "\n")
+    got_v, got_f = read_mesh(tmp_path / "c.off")
+    np.testing.assert_array_equal(got_v, v)
+    np.testing.assert_array_equal(got_f, f)
+    # A file whose header is another format's is refused, naming both.
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(v, [("triangle", f)]))
+    (tmp_path / "m.ply").write_bytes((tmp_path / "m.vtu").read_bytes())
+    with pytest.raises(MeshFolderError, match=r"m\.ply: .*not a PLY file: it starts with b'<"):
+        read_mesh(tmp_path / "m.ply")
+    (tmp_path / "m.vtk").write_text("solid x\n")
+    with pytest.raises(MeshFolderError, match=r"m\.vtk: .*not a legacy VTK file"):
+        read_mesh(tmp_path / "m.vtk")
+
+
+def test_binary_ply_is_written_through_meshio_in_double(tmp_path):
+    from ladders.study.meshes import write_mesh
+
+    path = write_mesh(tmp_path / "a.ply", COHORT.atlas, COHORT.faces)
+    header = path.read_bytes().split(b"end_header")[0]
+    assert b"format binary_little_endian" in header and b"property double x" in header
+    assert b"meshio" in header  # the writer's own comment
+    back = meshio.read(path)
+    np.testing.assert_array_equal(back.points, COHORT.atlas)
+    np.testing.assert_array_equal(back.cells_dict["triangle"], COHORT.faces)

@@ -3,17 +3,15 @@
 import numpy as np
 import pytest
 
-from ladders.study.cohort import Cohort, Subject
-from ladders.study.mesh_io import (
+from ladders.study.cohort import (
+    Cohort,
     MeshFolderError,
+    Subject,
+    make_synthetic_cohort,
     read_cohort,
-    read_mesh,
-    read_vtk,
     write_cohort,
-    write_mesh,
-    write_vtk,
 )
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.meshes import read_mesh, read_vtk, write_mesh, write_vtk
 
 COHORT = make_synthetic_cohort(n_subjects=3, grid=(9, 5), seed=2)
 

@@ -5,11 +5,10 @@ import numpy as np
 import pytest
 
 from ladders.study.area_strain import area_strain
-from ladders.study.cohort import MeshFolderError
-from ladders.study.mesh_outputs import write_point_mesh, write_subject_meshes
-from ladders.study.pipeline import StudyConfig, run_subject
-from ladders.study.runner import run_study
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort import MeshFolderError, make_synthetic_cohort
+from ladders.study.meshes import write_point_mesh
+from ladders.study.running import StudyConfig, compute_pair, make_space, run_study
+from manifolds.residual import ResidualAugmented
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
 CONFIG = StudyConfig.build(alpha2=(1.0,), sigma=20.0, max_iter=15, n_steps=5, fanning_steps=3)
@@ -31,9 +30,12 @@ def test_every_output_mesh_carries_the_named_point_data(study):
     atlas = meshio.read(folder / "atlas.vtu")
     np.testing.assert_array_equal(atlas.points, COHORT.atlas)
     np.testing.assert_array_equal(atlas.cells_dict["triangle"], COHORT.faces)
+    assert atlas.point_data == {}  # shared by the subjects: no subject's strain (docs)
     for subject, result in zip(COHORT.subjects, study.results, strict=True):
-        las = result["alpha2"]["1.0"]["las"]
+        pair = result.at(1.0)
         las_s = area_strain(subject.ed, subject.es, COHORT.faces)
+        for mesh_file in (folder / subject.name).rglob("*.vtu"):
+            assert "las_subject" in meshio.read(mesh_file).point_data, mesh_file
         for name in ("S", "S_prime"):
             mesh = meshio.read(folder / subject.name / f"{name}.vtu")
             np.testing.assert_allclose(mesh.point_data["las_subject"], las_s, rtol=0, atol=1e-14)
@@ -45,7 +47,7 @@ def test_every_output_mesh_carries_the_named_point_data(study):
             for s in ("M", "Tprime", "sM_Sprime")
         ]
         assert files == sorted(expected)
-        for method, key in zip(METHODS, ("residual", "no_residual", "fanning"), strict=True):
+        for method in METHODS:
             mesh = meshio.read(folder / subject.name / "alpha2_1" / f"{method}_Tprime.vtu")
             assert mesh.points.shape == (k, 3)
             np.testing.assert_array_equal(mesh.cells_dict["triangle"], COHORT.faces)
@@ -58,24 +60,27 @@ def test_every_output_mesh_carries_the_named_point_data(study):
                 data["las_transported"], area_strain(COHORT.atlas, mesh.points, COHORT.faces),
                 rtol=0, atol=1e-12,
             )  # fmt: skip
-            np.testing.assert_allclose(data["las_transported"], las[key], rtol=0, atol=1e-14)
-            np.testing.assert_allclose(data["las_difference"], np.subtract(las[key], las_s))
+            las = pair.transport(method).las
+            np.testing.assert_allclose(data["las_transported"], las, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(data["las_difference"], np.subtract(las, las_s))
             np.testing.assert_allclose(data["displacement"], mesh.points - COHORT.atlas)
             # ASE = L2 norm of the difference map.
-            ase = result["alpha2"]["1.0"][key]["ase"]
+            ase = pair.transport(method).ase
             assert np.linalg.norm(data["las_difference"]) == pytest.approx(ase, rel=1e-12)
-        assert "shapes" not in result  # the stored JSON holds no arrays
 
 
-def test_midpoint_mesh_matches_run_subject(study):
+def test_midpoint_and_reflected_meshes_are_those_of_the_space(study):
+    """M = Exp_T(1/2 Log_T S) and s_M(S') of each variant, computed with the library."""
     subject = COHORT.subjects[0]
-    result = run_subject(CONFIG, COHORT.atlas, COHORT.faces, subject, keep_shapes=True)
-    shapes = result["shapes"]["1.0"]
+    space = make_space(CONFIG, COHORT.atlas, 1.0)
     for variant in ("residual", "no_residual"):
-        for shape, label in (("midpoint", "M"), ("reflected", "sM_Sprime")):
+        sp = ResidualAugmented(space, use_residuals=variant == "residual")
+        m = sp.midpoint(COHORT.atlas, subject.ed)
+        expected = {"M": m, "sM_Sprime": sp.symmetry(m, subject.es)}
+        for label, points in expected.items():
             path = study.output / "meshes" / study.config_id / subject.name / "alpha2_1"
             mesh = meshio.read(path / f"pole_ladder_{variant}_{label}.vtu")
-            np.testing.assert_allclose(mesh.points, shapes[variant][shape], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(mesh.points, points, rtol=0, atol=1e-9)
 
 
 def test_no_meshes_option_and_legacy_vtk(tmp_path):
@@ -84,15 +89,17 @@ def test_no_meshes_option_and_legacy_vtk(tmp_path):
         CONFIG, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False, meshes=False
     )
     assert not (tmp_path / "meshes").exists()
-    result = run_subject(CONFIG, cohort.atlas, cohort.faces, cohort.subjects[0], keep_shapes=True)
-    paths = write_subject_meshes(
-        tmp_path / "vtk", cohort.subjects[0], cohort.atlas, cohort.faces, result, ext=".vtk"
+    subject = cohort.subjects[0]
+    compute_pair(
+        CONFIG, cohort.atlas, cohort.faces, subject, 1.0, tmp_path / "vtk", mesh_format=".vtk"
     )
-    assert len(paths) == 1 + 2 + 7 and "shapes" not in result
+    paths = sorted((tmp_path / "vtk").rglob("*"))
+    assert len([p for p in paths if p.is_file()]) == 1 + 2 + 7
+    assert all(p.suffix == ".vtk" for p in paths if p.is_file())
     mesh = meshio.read(tmp_path / "vtk" / cohort.names[0] / "alpha2_1" / "fanning_Tprime.vtk")
     assert mesh.point_data["las_difference"].shape == (cohort.n_vertices,)
-    with pytest.raises(MeshFolderError, match="keep_shapes=True"):
-        write_subject_meshes(tmp_path, cohort.subjects[0], cohort.atlas, cohort.faces, result)
+    with pytest.raises(ValueError, match="mesh_format: expected one of"):
+        compute_pair(CONFIG, cohort.atlas, cohort.faces, subject, 1.0, tmp_path, ".ply")
 
 
 def test_write_point_mesh_errors(tmp_path):

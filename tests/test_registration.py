@@ -104,7 +104,7 @@ def test_example_runs(tmp_path):
 
 def bent_ellipsoid(subdivisions=2):
     """The benchmark's ellipsoid and its bent and twisted copy (162 vertices by default)."""
-    from ladders.study.benchmark_shapes import bent_ellipsoid as shapes
+    from ladders.study.cohort.benchmark_shapes import bent_ellipsoid as shapes
 
     template, target, _ = shapes(subdivisions)
     return template, target

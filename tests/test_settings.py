@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from ladders.study.pipeline import StudyConfig
+from ladders.study.running.pipeline import StudyConfig
 from manifolds.errors import ManifoldError
 from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks
 

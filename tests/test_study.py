@@ -1,5 +1,6 @@
 """The paper's Section 3 study on a small cohort: outputs, qualitative findings, resume, CLI."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -12,11 +13,9 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import main
-from ladders.study.mesh_io import write_cohort
-from ladders.study.pipeline import ERROR_NAMES, StudyConfig
-from ladders.study.report import summarize, write_report
-from ladders.study.runner import run_study
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cohort import make_synthetic_cohort, write_cohort
+from ladders.study.reporting import summarize, write_report
+from ladders.study.running import ERROR_NAMES, VARIANTS, StudyConfig, run_study
 
 ALPHA2 = (0.01, 1.0, 100.0)
 CONFIG = StudyConfig.build(alpha2=ALPHA2, sigma=20.0, max_iter=60, fanning_steps=5)
@@ -27,12 +26,13 @@ COHORT = make_synthetic_cohort(n_subjects=3, grid=(8, 5), seed=0)
 def study(tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
     outcome = run_study(CONFIG, COHORT.atlas, COHORT.faces, COHORT.subjects, out, progress=False)
-    paths = write_report(outcome.results, out, COHORT.atlas, COHORT.faces, COHORT.subjects[0].ed)
+    shapes = {s.name: s.ed for s in COHORT.subjects}
+    paths = write_report(outcome.results, out, COHORT.atlas, COHORT.faces, shapes)
     return outcome, paths
 
 
 def _means(results, variant, name):
-    return {a: np.mean([r["alpha2"][str(a)][variant][name] for r in results]) for a in ALPHA2}
+    return {a: np.mean([r.at(a).measure(variant, name) for r in results]) for a in ALPHA2}
 
 
 def test_outputs_are_written_and_readable(study):
@@ -61,17 +61,32 @@ def test_outputs_are_written_and_readable(study):
     assert len(paired) - 1 == len(ALPHA2) * 5
 
 
+def test_fig5b_shows_the_median_subject_without_white_margins(study):
+    from matplotlib.image import imread
+
+    outcome, paths = study
+    ase = {r.subject: r.at(1.0).measure("residual", "ase") for r in outcome.results}
+    ranked = sorted(ase, key=ase.get)
+    assert paths["maps_subject"] == ranked[len(ranked) // 2]  # 3 subjects: the middle one
+    image = imread(paths["maps_png"])[..., :3]
+    ink = np.argwhere((image < 0.97).any(axis=2))  # pixels that are not white
+    (top, left), (bottom, right) = ink.min(axis=0), ink.max(axis=0)
+    height, width = image.shape[:2]
+    assert top <= 0.04 * height and bottom >= 0.96 * height  # margins under 4 %
+    assert left <= 0.04 * width and right >= 0.96 * width
+
+
 def test_cli_exit_status_counts_failed_subjects(tmp_path, monkeypatch, capsys):
-    import ladders.study.runner as runner_mod
+    import ladders.study.running.runner as runner_mod
 
-    original = runner_mod._one_alpha
+    original = runner_mod.compute_pair
 
-    def failing(config, atlas, faces, subject, alpha2, las_subject, shapes=None):
+    def failing(config, atlas, faces, subject, alpha2, meshes=None):
         if subject.name == COHORT.names[1]:
             raise RuntimeError("the norm drift guard tripped")
-        return original(config, atlas, faces, subject, alpha2, las_subject, shapes)
+        return original(config, atlas, faces, subject, alpha2, meshes)
 
-    monkeypatch.setattr(runner_mod, "_one_alpha", failing)
+    monkeypatch.setattr(runner_mod, "compute_pair", failing)
     meshes = write_cohort(COHORT, tmp_path / "meshes", ext="ply")
     args = [
         "study", "--meshes", str(meshes), "--output", str(tmp_path / "o"), "--alpha2", "100",
@@ -98,8 +113,8 @@ def test_residuals_improve_midpoint_centrality_involutivity(study):
 def test_registration_error_grows_and_norm_shrinks_with_alpha(study):
     outcome, _ = study
     for r in outcome.results:
-        errs = [r["alpha2"][str(a)]["registration_error"] for a in ALPHA2]
-        norms = [r["alpha2"][str(a)]["rkhs_norm"] for a in ALPHA2]
+        errs = [r.at(a).registration.error for a in ALPHA2]
+        norms = [r.at(a).registration.rkhs_norm for a in ALPHA2]
         assert np.all(np.diff(errs) > 0), errs
         assert np.all(np.diff(norms) < 0), norms
 
@@ -109,13 +124,19 @@ def test_each_result_is_complete_and_finite(study):
     k = COHORT.n_vertices
     for r in outcome.results:
         for a in ALPHA2:
-            node = r["alpha2"][str(a)]
-            for variant in ("residual", "no_residual"):
+            node = r.at(a)
+            assert node.non_finite_fields() == []
+            for variant in VARIANTS:
                 for name in (*ERROR_NAMES, "ase"):
-                    assert np.isfinite(node[variant][name]) and node[variant][name] >= 0
-            assert np.isfinite(node["fanning"]["ase"])
-            assert all(len(v) == k for v in node["las"].values())
-            assert node["n_registrations"] <= 13  # shared registrations are not repeated
+                    assert np.isfinite(node.measure(variant, name))
+                    assert node.measure(variant, name) >= 0
+            assert [t.method for t in node.transports] == [
+                "pole_ladder_residual", "pole_ladder_no_residual", "fanning"
+            ]  # fmt: skip
+            assert np.isfinite(node.transport("fanning").ase)
+            assert len(node.las_subject) == k and all(len(t.las) == k for t in node.transports)
+            assert node.counts.n_registrations <= 13  # shared registrations are not repeated
+            assert node.counts.n_flow_evaluations >= node.counts.n_iterations > 0
 
 
 def test_resume_after_partial_run_gives_identical_results(study, tmp_path):
@@ -128,8 +149,8 @@ def test_resume_after_partial_run_gives_identical_results(study, tmp_path):
     assert sorted(resumed.computed) == [(n, a) for n in COHORT.names[1:] for a in ALPHA2]
     for got, ref in zip(resumed.results, outcome.results, strict=True):
         for a in ALPHA2:
-            strip = {k: v for k, v in got["alpha2"][str(a)].items() if k != "seconds"}
-            assert strip == {k: v for k, v in ref["alpha2"][str(a)].items() if k != "seconds"}
+            strip = dataclasses.replace(got.at(a), seconds=0.0)
+            assert strip == dataclasses.replace(ref.at(a), seconds=0.0)
     assert summarize(resumed.results) == summarize(outcome.results)
 
 
@@ -178,7 +199,7 @@ def test_cli_on_a_mesh_folder_and_kill_then_resume(tmp_path):
 
 
 def test_cli_rejects_mismatched_meshes(tmp_path, capsys):
-    from ladders.study.mesh_io import write_mesh
+    from ladders.study.meshes import write_mesh
 
     meshes = write_cohort(COHORT.head(1), tmp_path / "meshes", ext="ply")
     other = make_synthetic_cohort(1, grid=(6, 4), seed=1)
@@ -206,16 +227,19 @@ def test_dask_backend_gives_the_same_results(study, tmp_path):
     assert sorted({name for name, _ in res.computed}) == cohort.names
     # Other threads, other BLAS summation orders: equal up to round-off, not bitwise.
     for got, ref in zip(res.results, outcome.results[:2], strict=True):
-        np.testing.assert_allclose(_leaves(got["alpha2"]), _leaves(ref["alpha2"]), rtol=1e-6)
+        np.testing.assert_allclose(_leaves(got.pairs), _leaves(ref.pairs), rtol=1e-6)
 
 
 def _leaves(node):
     # Numbers only, without the timings. The count of non-converged registrations is
     # kept: each space counts its own, so concurrent threads cannot mix them up.
+    if dataclasses.is_dataclass(node):
+        node = dataclasses.asdict(node)
     if isinstance(node, dict):
-        skip = ("seconds",)
-        keep = [k for k in sorted(node) if k not in skip and not isinstance(node[k], str)]
+        keep = [k for k in sorted(node) if k != "seconds" and not isinstance(node[k], str)]
         return np.concatenate([_leaves(node[k]) for k in keep])
+    if isinstance(node, (list, tuple)) and node and not isinstance(node[0], (int, float)):
+        return np.concatenate([_leaves(v) for v in node])
     return np.atleast_1d(np.asarray(node, dtype=float)).ravel()
 
 
@@ -230,9 +254,9 @@ def test_claim_a_holds_at_small_alpha_with_control_points_at_the_vertices(tmp_pa
     out = run_study(
         config, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False, meshes=False
     )
-    assert all(r["non_converged_registrations"] == 0 for r in out.results)
-    for a in ("0.01", "1.0"):
+    assert all(r.non_converged_registrations == 0 for r in out.results)
+    for a in (0.01, 1.0):
         for name in ("midpoint_distance", "centrality", "involutivity"):
-            with_res = np.mean([r["alpha2"][a]["residual"][name] for r in out.results])
-            without = np.mean([r["alpha2"][a]["no_residual"][name] for r in out.results])
+            with_res = np.mean([r.at(a).measure("residual", name) for r in out.results])
+            without = np.mean([r.at(a).measure("no_residual", name) for r in out.results])
             assert with_res < without, (a, name, with_res, without)

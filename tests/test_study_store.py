@@ -1,6 +1,7 @@
 """The study's result store: resume per (subject, alpha^2), configurations kept apart,
 schema checks, safe names, umask, claims, failures and the manifest."""
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -11,12 +12,10 @@ import time
 
 import pytest
 
-import ladders.study.runner as runner_mod
-from ladders.study.cohort import Subject
-from ladders.study.pipeline import StudyConfig
-from ladders.study.runner import configuration_id, run_study
-from ladders.study.store import PairStore, atomic_write_text, validate_subject_name
-from ladders.study.synthetic_lv import make_synthetic_cohort
+import ladders.study.running.runner as runner_mod
+from ladders.study.cohort import Subject, make_synthetic_cohort
+from ladders.study.running import SCHEMA_VERSION, StudyConfig, configuration_id, run_study
+from ladders.study.running.store import PairStore, atomic_write_text, validate_subject_name
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(6, 4), seed=3)
 CFG = StudyConfig.build(alpha2=(100.0,), sigma=20.0, max_iter=15, fanning_steps=2)
@@ -33,14 +32,14 @@ def _files(out):
 
 def _count_registrations(monkeypatch):
     calls = []
-    original = runner_mod._one_alpha
+    original = runner_mod.compute_pair
 
-    def counting(config, atlas, faces, subject, alpha2, las_subject, shapes=None):
-        out = original(config, atlas, faces, subject, alpha2, las_subject, shapes)
-        calls.append((subject.name, alpha2, out["n_registrations"]))
+    def counting(config, atlas, faces, subject, alpha2, meshes=None):
+        out = original(config, atlas, faces, subject, alpha2, meshes)
+        calls.append((subject.name, alpha2, out.counts.n_registrations))
         return out
 
-    monkeypatch.setattr(runner_mod, "_one_alpha", counting)
+    monkeypatch.setattr(runner_mod, "compute_pair", counting)
     return calls
 
 
@@ -58,7 +57,7 @@ def test_extending_the_sweep_computes_only_the_new_pairs(tmp_path, monkeypatch):
     after = _files(tmp_path)
     assert all(after[p] == data for p, data in before.items())  # untouched
     assert len(after) == 4
-    assert [sorted(r["alpha2"]) for r in second.results] == [["100.0", "1089.0"]] * 2
+    assert [r.alpha2 for r in second.results] == [(100.0, 1089.0)] * 2
 
 
 def test_another_configuration_never_touches_earlier_results(tmp_path):
@@ -81,12 +80,16 @@ def test_partial_or_corrupt_result_is_recomputed(tmp_path):
     store = PairStore(tmp_path, out.config_id)
     a, b = (store.path(n, 100.0) for n in COHORT.names)
     data = json.loads(a.read_text())
-    del data["residual"]["centrality"]
+    del data["errors"][0]["centrality"]
     a.write_text(json.dumps(data))  # valid JSON, right hash, missing a field
     b.write_text(b.read_text()[:200])  # truncated
     again = _run(CFG, tmp_path)
     assert sorted(again.computed) == [(n, 100.0) for n in COHORT.names]
-    assert "centrality" in json.loads(a.read_text())["residual"]
+    assert "centrality" in json.loads(a.read_text())["errors"][0]
+    assert again.recomputed == {
+        (COHORT.names[0], 100.0): "errors[0]: missing ['centrality']",
+        (COHORT.names[1], 100.0): "not valid JSON",
+    }
 
 
 @pytest.mark.parametrize("name", ["", "  ", "..", ".", "../x", "a/b", "a\\b", ".hidden", "a\0b"])
@@ -117,27 +120,27 @@ def test_files_follow_the_umask(tmp_path, mask):
 
 
 def test_a_failing_subject_is_recorded_and_the_others_finish(tmp_path, monkeypatch):
-    original = runner_mod._one_alpha
+    original = runner_mod.compute_pair
     bad = COHORT.names[0]
 
-    def failing(config, atlas, faces, subject, alpha2, las_subject, shapes=None):
+    def failing(config, atlas, faces, subject, alpha2, meshes=None):
         if subject.name == bad:
             raise FloatingPointError("norm drift in the fanning scheme")
-        return original(config, atlas, faces, subject, alpha2, las_subject, shapes)
+        return original(config, atlas, faces, subject, alpha2, meshes)
 
-    monkeypatch.setattr(runner_mod, "_one_alpha", failing)
+    monkeypatch.setattr(runner_mod, "compute_pair", failing)
     out = _run(CFG, tmp_path)
     assert out.n_failed_subjects == 1
-    assert out.failures == [
-        {"subject": bad, "alpha2": 100.0, "error": "FloatingPointError: norm drift in the fanning scheme"}
-    ]  # fmt: skip
-    assert out.results[0]["alpha2"] == {} and out.results[0]["failed"]
-    assert list(out.results[1]["alpha2"]) == ["100.0"]
+    assert [(f.subject, f.alpha2, f.error) for f in out.failures] == [
+        (bad, 100.0, "FloatingPointError: norm drift in the fanning scheme")
+    ]
+    assert out.results[0].pairs == () and out.results[0].failures
+    assert out.results[1].alpha2 == (100.0,)
     stored = json.loads(PairStore(tmp_path, out.config_id).path(bad, 100.0).read_text())
     assert stored["status"] == "failed" and "norm drift" in stored["traceback"]
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert manifest["failed_subjects"] == 1
-    monkeypatch.setattr(runner_mod, "_one_alpha", original)
+    monkeypatch.setattr(runner_mod, "compute_pair", original)
     retry = _run(CFG, tmp_path)  # failed pairs are retried, finished ones reused
     assert retry.computed == [(bad, 100.0)] and retry.failures == []
 
@@ -235,15 +238,51 @@ def test_a_reused_pid_does_not_hold_a_claim(tmp_path):
 
 
 def test_a_non_finite_result_is_recorded_as_failed(tmp_path, monkeypatch):
-    original = runner_mod._one_alpha
+    original = runner_mod.compute_pair
 
-    def nan_centrality(config, atlas, faces, subject, alpha2, las_subject, shapes=None):
-        out = original(config, atlas, faces, subject, alpha2, las_subject, shapes)
+    def nan_centrality(config, atlas, faces, subject, alpha2, meshes=None):
+        out = original(config, atlas, faces, subject, alpha2, meshes)
         if subject.name == COHORT.names[1]:
-            out["residual"]["centrality"] = float("nan")
+            errors = (dataclasses.replace(out.errors[0], centrality=float("nan")), out.errors[1])
+            out = dataclasses.replace(out, errors=errors)
         return out
 
-    monkeypatch.setattr(runner_mod, "_one_alpha", nan_centrality)
+    monkeypatch.setattr(runner_mod, "compute_pair", nan_centrality)
     out = _run(CFG, tmp_path)
-    assert [f["subject"] for f in out.failures] == [COHORT.names[1]]
-    assert out.failures[0]["error"].endswith("non-finite: residual.centrality")
+    assert [f.subject for f in out.failures] == [COHORT.names[1]]
+    assert out.failures[0].error.endswith("non-finite: residual.centrality")
+
+
+def test_a_result_of_an_older_schema_is_recomputed_with_a_message(tmp_path, capsys):
+    """A file written before the typed results (no schema_version) is never read half-way."""
+    from ladders.study.cli import main
+
+    first = _run(CFG, tmp_path, COHORT.subjects[:1])
+    path = PairStore(tmp_path, first.config_id).path(COHORT.names[0], 100.0)
+    data = json.loads(path.read_text())
+    old = {k: v for k, v in data.items() if k not in ("schema_version", "errors")}
+    old["residual"] = {"centrality": 1.0}  # the layout of schema 1
+    path.write_text(json.dumps(old))
+    again = _run(CFG, tmp_path, COHORT.subjects[:1])
+    assert again.computed == [(COHORT.names[0], 100.0)]
+    reason = again.recomputed[(COHORT.names[0], 100.0)]
+    assert reason == f"written with result schema 1, this version reads schema {SCHEMA_VERSION}"
+    assert json.loads(path.read_text())["schema_version"] == SCHEMA_VERSION
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["pairs_recomputed"] == [
+        {"subject": COHORT.names[0], "alpha2": 100.0, "reason": reason}
+    ]
+    # The command line says so on standard error.
+    path.write_text(json.dumps(old))
+    args = ["study", "--subjects", "1", "--vertices", "25", "-o", str(tmp_path / "cli")]
+    args += ["--alpha2", "100", "--max-iter", "15", "--fanning-steps", "2", "--jobs", "1"]
+    assert main([*args, "--no-progress", "--no-meshes"]) == 0
+    (stored,) = (tmp_path / "cli" / "results").glob("*/*/alpha2=100.0.json")
+    stored.write_text(json.dumps({**json.loads(stored.read_text()), "schema_version": 1}))
+    capsys.readouterr()
+    assert main([*args, "--no-progress", "--no-meshes"]) == 0
+    err = capsys.readouterr().err
+    assert (
+        "note: 1 stored (subject, alpha^2) result(s) were computed again: written with "
+        f"result schema 1, this version reads schema {SCHEMA_VERSION}"
+    ) in err

@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 
 from ladders.study.cli import build_parser, main
-from ladders.study.cli_types import UsageError
-from ladders.study.pipeline import ERROR_NAMES, VARIANTS, StudyConfig, make_space, run_subject
-from ladders.study.synthetic_lv import make_synthetic_cohort
+from ladders.study.cli.cli_types import UsageError
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.running import ERROR_NAMES, VARIANTS, StudyConfig, compute_pair, make_space
 from manifolds.lddmm import LDDMMLandmarks, SVFLandmarks
+
+from .fake_results import fake_pair, fake_subject
 
 COHORT = make_synthetic_cohort(n_subjects=2, grid=(8, 5), seed=0)
 
@@ -17,18 +19,23 @@ COHORT = make_synthetic_cohort(n_subjects=2, grid=(8, 5), seed=0)
 def test_svf_subject_has_the_lddmm_fields_and_finite_values():
     kw = dict(alpha2=(1.0,), sigma=20.0, max_iter=40, fanning_steps=3)
     subject = COHORT.subjects[0]
-    svf = run_subject(
-        StudyConfig.build(deformation="svf", **kw), COHORT.atlas, COHORT.faces, subject
-    )
-    lddmm = run_subject(StudyConfig.build(**kw), COHORT.atlas, COHORT.faces, subject)
-    a_svf, a_lddmm = svf["alpha2"]["1.0"], lddmm["alpha2"]["1.0"]
-    assert set(a_svf) == set(a_lddmm)
+    args = (COHORT.atlas, COHORT.faces, subject, 1.0)
+    a_svf = compute_pair(StudyConfig.build(deformation="svf", **kw), *args)
+    a_lddmm = compute_pair(StudyConfig.build(**kw), *args)
+    assert a_svf.deformation == "svf" and a_lddmm.deformation == "lddmm"
+    # The third transport is named for what it is in each study.
+    assert [t.method for t in a_svf.transports] == [
+        "pole_ladder_residual", "pole_ladder_no_residual", "svf_conjugation"
+    ]  # fmt: skip
+    assert a_lddmm.transports[2].method == "fanning"
+    assert a_svf.non_finite_fields() == []
     for variant in VARIANTS:
         for name in (*ERROR_NAMES, "ase"):
-            assert np.isfinite(a_svf[variant][name]) and a_svf[variant][name] >= 0
-    assert np.isfinite(a_svf["fanning"]["ase"]) and a_svf["inverse_consistency"] >= 0
+            assert np.isfinite(a_svf.measure(variant, name)) and a_svf.measure(variant, name) >= 0
+    assert np.isfinite(a_svf.transport("svf_conjugation").ase)
+    assert a_svf.registration.inverse_consistency >= 0
     # the two models give different registrations of the same pair
-    assert a_svf["rkhs_norm"] != pytest.approx(a_lddmm["rkhs_norm"], rel=1e-3)
+    assert a_svf.registration.rkhs_norm != pytest.approx(a_lddmm.registration.rkhs_norm, rel=1e-3)
 
 
 def test_config_builds_the_chosen_space_and_keeps_lddmm_hashes():
@@ -54,24 +61,19 @@ def test_cli_deformation_flag(tmp_path):
     assert manifest["config"]["deformation"] == "svf"
 
 
-def _fake_results(values: dict[str, float], inverse: float) -> list[dict]:
+def _fake_results(values: dict[str, float], inverse: float) -> list:
     """Per-subject results whose every error equals ``values[subject]``."""
     out = []
     for name, v in values.items():
-        variant = {e: v for e in (*ERROR_NAMES, "ase")}
-        pair = {
-            "residual": dict(variant),
-            "no_residual": dict(variant),
-            "registration_error": v,
-            "rkhs_norm": 2 * v,
-            "inverse_consistency": inverse,
-        }
-        out.append({"subject": name, "alpha2": {"1.0": pair}})
+        errors = {variant: (v, v, v, v) for variant in VARIANTS}
+        ase = {"pole_ladder_residual": v, "pole_ladder_no_residual": v, "fanning": v}
+        pair = fake_pair(name, 1.0, errors, ase, (v, 2 * v, inverse, True))
+        out.append(fake_subject(name, [pair]))
     return out
 
 
 def test_comparison_pairs_subjects_by_name_with_known_answers():
-    from ladders.study.deformation_comparison import (
+    from ladders.study.reporting.deformation_comparison import (
         compare_deformations,
         comparison_csv,
         comparison_markdown,

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from ladders.study.cohort import MeshFolderError
-from ladders.study.synthetic_lv import make_synthetic_cohort
-from ladders.study.vtk_xml import read_vtp
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.meshes.vtk_xml import read_vtp
 
 from .vtp_writer import vtp_bytes
 

@@ -3,7 +3,11 @@
 A policy turns a template shape into the control points ``c`` that carry the
 momenta:
 
-* ``"dense"``: the template's own vertices (``n_cp = k``);
+* ``"dense"``: the template's own vertices (``n_cp = k``). This is the one meaning of
+  "dense" in the package: control points that are the template's vertices, which
+  :func:`manifolds.lddmm.registration_problem.is_dense` tells (the registration and
+  :meth:`~manifolds.lddmm.LDDMMLandmarks.shoot` then carry the template as the
+  control points themselves);
 * ``"grid"``: a regular grid of spacing ``sigma`` centred on the template's
   bounding box (a 642-vertex ellipsoid with semi-axes 1, 0.7, 0.5 and
   ``sigma = 0.5`` gets 5 x 3 x 3 = 45 points);

@@ -15,9 +15,10 @@ import numpy as np
 
 from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
-from .hamiltonian_shooting import shoot
+from .hamiltonian_shooting import hamiltonian_system, shoot
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register
+from .registration_problem import is_dense
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]
@@ -57,10 +58,10 @@ class LDDMMLandmarks(KernelLandmarkSpace):
             Defaults to the policy's control points of ``template``.
         return_trajectory : bool
             Also return the list of ``n_steps + 1`` states ``(c, mu, x)`` (for
-            dense control points the template is carried as ``c``, and the states
-            are ``(c, mu)``).
+            dense control points, :func:`~manifolds.lddmm.registration_problem.is_dense`,
+            the template is carried as ``c``, and the states are ``(c, mu)``).
         integrator : optional
-            Overrides the space's integrator (e.g. ``"rk2"`` for the fanning scheme).
+            Overrides the space's integrator.
         """
         template = self.check_point(template, "template")
         if control_points is None:
@@ -68,7 +69,7 @@ class LDDMMLandmarks(KernelLandmarkSpace):
         else:
             cp = check_array(control_points, (self.point_shape[1],), f"{self.name}: control_points")
         momenta = self._check_momenta(cp, momenta, "momenta")
-        dense = cp is template
+        dense = is_dense(template, cp)
         res = shoot(
             self.kernel,
             cp,
@@ -86,6 +87,23 @@ class LDDMMLandmarks(KernelLandmarkSpace):
             f"sigma {self.sigma:g}): momenta too large for the kernel width",
         )
         return (deformed, res.trajectory) if return_trajectory else deformed
+
+    def geodesic_step(self, control_points, momenta, h: float):
+        """One step of size ``h`` of the geodesic equations of ``(c, mu)`` (eq. 2).
+
+        The step of the space's own integrator on the Hamiltonian system that
+        :meth:`shoot` integrates: ``n`` steps of size ``1/n`` from ``(c, mu)`` give
+        the control points and momenta of ``shoot`` with ``n_steps = n``. The
+        fanning scheme (:func:`ladders.fanning_scheme`) shoots with it.
+
+        Returns
+        -------
+        control_points, momenta : arrays, shape ``(n_cp, d)``
+        """
+        rhs, _ = hamiltonian_system(self.kernel)
+        state = (np.asarray(control_points, dtype=float), np.asarray(momenta, dtype=float))
+        (c, mu), _ = self.integrator.step(rhs, state, float(h))
+        return c, mu
 
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
         """``phi_1(points)`` for the deformation shot from the template's control points."""

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cohort import MeshFolderError
+from ..errors import MeshFolderError
 
 __all__ = ["read_vtk", "write_vtk"]
 
@@ -170,6 +170,3 @@ def write_vtk(path, vertices, faces, binary: bool = False) -> Path:
         tri = "\n".join(" ".join(str(i) for i in row) for row in cells)
         path.write_text(head + pts + "\n" + cell_head + tri + "\n")
     return path
-
-
-# --------------------------------------------------------------------------- meshes

@@ -258,7 +258,7 @@ def _seed_sequence(seed) -> np.random.SeedSequence:
 
 def make_synthetic_cohort(
     n_subjects: int = 138,
-    n_vertices: int = 1000,
+    n_vertices: int = 1009,
     seed: int | np.random.Generator = 0,
     model: SyntheticLVModel | None = None,
     grid: tuple[int, int] | None = None,
@@ -276,8 +276,9 @@ def make_synthetic_cohort(
         Number of subjects (the paper's study has 138).
     n_vertices : int
         Approximate number of vertices per mesh, rounded to the grid
-        ``1 + n_longitude * n_latitude`` by :func:`grid_shape` (1009 for the
-        default 1000: mean edge 3.9 mm on the atlas; 241 gives 8 mm). Ignored
+        ``1 + n_longitude * n_latitude`` by :func:`grid_shape`: the default 1009
+        is the grid (42, 24) exactly (mean edge 3.9 mm on the atlas; 241 gives 8 mm),
+        and 1000 rounds to it. Ignored
         when ``grid`` is given.
     seed : int or numpy.random.Generator
         Seed of all random draws.

@@ -6,29 +6,19 @@ import json
 import sys
 import time
 import traceback
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from manifolds.errors import ConvergenceWarning
-
-from .area_strain import area_strain
-from .cohort import CohortError, Subject
-from .mesh_outputs import write_subject_meshes
-from .pipeline import StudyConfig, _one_alpha
+from ..cohort import Subject
+from ..errors import CohortError
+from .pipeline import StudyConfig, compute_pair
 from .provenance import write_manifest
-from .store import (
-    PairStore,
-    array_digest,
-    atomic_write_text,
-    config_hash,
-    missing_fields,
-    validate_subject_name,
-)
+from .results import FailedPair, PairResult, SubjectResults
+from .store import PairStore, array_digest, atomic_write_text, config_hash, validate_subject_name
 
-__all__ = ["StudyOutcome", "run_study", "compute_pair", "configuration_id", "mesh_files"]
+__all__ = ["StudyOutcome", "run_study", "configuration_id"]
 
 _CLAIM_POLL_S = 0.5  # how often a run checks pairs claimed by another run
 
@@ -41,32 +31,34 @@ class StudyOutcome:
     ----------
     output : Path
         The results folder.
-    results : list of dict
-        Per subject (in the cohort's order): ``subject``, ``alpha2`` (the
-        successful pair results keyed by ``str(alpha2)``), ``failed`` (error
-        message per ``str(alpha2)``), ``non_converged_registrations``, ``seconds``.
+    results : list of SubjectResults
+        Per subject, in the cohort's order: its successful pairs and its failures.
     computed, skipped : list of (str, float)
         Pairs computed by this run / reused from earlier (or concurrent) runs.
     seconds : float
         Wall time of this run.
-    failures : list of dict
-        ``subject``, ``alpha2``, ``error`` of every pair that raised.
+    failures : list of FailedPair
+        Every pair that raised.
     config_id : str
         Folder of this configuration under ``output/results/``.
+    recomputed : dict
+        ``(subject, alpha2) -> reason`` for the stored files that could not be
+        used (another result schema, a missing field, ...) and were computed again.
     """
 
     output: Path
-    results: list
+    results: list[SubjectResults]
     computed: list
     skipped: list
     seconds: float
-    failures: list = field(default_factory=list)
+    failures: list[FailedPair] = field(default_factory=list)
     config_id: str = ""
+    recomputed: dict = field(default_factory=dict)
 
     @property
     def n_failed_subjects(self) -> int:
         """Number of subjects with at least one failed pair."""
-        return len({f["subject"] for f in self.failures})
+        return len({f.subject for f in self.failures})
 
 
 def configuration_id(config: StudyConfig, atlas, faces) -> tuple[str, dict]:
@@ -82,69 +74,24 @@ def configuration_id(config: StudyConfig, atlas, faces) -> tuple[str, dict]:
     return config_hash(shared), shared
 
 
-#: Suffixes of mesh files whose hashes :func:`mesh_files` collects for the manifest.
-MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".vtk", ".vtu", ".vtp")
-
-
-def mesh_files(folder) -> list[Path]:
-    """Mesh files under ``folder`` (recursively, sorted), for the manifest's hashes."""
-    return sorted(p for p in Path(folder).rglob("*") if p.suffix.lower() in MESH_SUFFIXES)
-
-
 def _pair_hash(config_id: str, subject: Subject, alpha2: float) -> str:
     ed, es = array_digest(subject.ed), array_digest(subject.es)
     return config_hash({"config": config_id, "alpha2": float(alpha2), "ed": ed, "es": es})
 
 
-def compute_pair(
-    config: StudyConfig, atlas, faces, subject: Subject, alpha2: float, meshes=None
-) -> dict:
-    """The results of one subject at one ``alpha^2`` (a JSON-ready dict, ``status: "ok"``).
-
-    With ``meshes`` (a folder) the pair's shapes and strain maps are written
-    there as ``.vtu`` files (:func:`ladders.study.mesh_outputs.write_subject_meshes`).
-
-    Registrations stopped by the iteration limit are counted by the space
-    itself (``non_converged_registrations``) rather than warned once per call.
-    """
-    start = time.perf_counter()
-    las_subject = area_strain(subject.ed, subject.es, faces)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
-        shapes = {} if meshes is not None else None
-        out = _one_alpha(config, atlas, faces, subject, float(alpha2), las_subject, shapes)
-    if meshes is not None:
-        key = str(float(alpha2))
-        write_subject_meshes(
-            meshes, subject, atlas, faces, {"alpha2": {key: out}, "shapes": {key: shapes}}
-        )
-    for w in caught:
-        if not issubclass(w.category, ConvergenceWarning):
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    out["status"] = "ok"
-    out["kernel_backend"] = config.registration.resolved_backend()
-    out["seconds"] = time.perf_counter() - start
-    return out
-
-
-def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> dict:
-    """:func:`compute_pair`, with any exception recorded as a failed result."""
+def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> PairResult | FailedPair:
+    """:func:`compute_pair`, with any exception (or non-finite number) recorded as a failure."""
     start = time.perf_counter()
     try:
         out = compute_pair(config, atlas, faces, subject, alpha2, meshes)
     except Exception as exc:  # a failing subject must not stop the others
         error, trace = f"{type(exc).__name__}: {exc}", traceback.format_exc()
     else:
-        missing = missing_fields(out)
-        if not missing:
+        bad = out.non_finite_fields()
+        if not bad:
             return out
-        error, trace = f"incomplete result, missing or non-finite: {', '.join(missing)}", ""
-    return {
-        "status": "failed",
-        "error": error,
-        "traceback": trace,
-        "seconds": time.perf_counter() - start,
-    }
+        error, trace = f"incomplete result, missing or non-finite: {', '.join(bad)}", ""
+    return FailedPair(subject.name, alpha2, error, trace, time.perf_counter() - start)
 
 
 def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshes=None) -> dict:
@@ -155,12 +102,12 @@ def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshe
             report["busy"].append(a2)  # another run is computing it
             continue
         finished = store.load(subject.name, a2, _pair_hash(config_id, subject, a2))
-        if finished is not None and finished["status"] == "ok":
+        if isinstance(finished, PairResult):
             store.release(subject.name, a2)  # another run finished it meanwhile
             continue
         try:
             result = _attempt(config, atlas, faces, subject, a2, meshes)
-            store.save(subject.name, a2, _pair_hash(config_id, subject, a2), result)
+            store.save(result, _pair_hash(config_id, subject, a2))
         finally:
             store.release(subject.name, a2)
         report["computed"].append(a2)
@@ -211,38 +158,29 @@ def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id, 
     return taken_over
 
 
-def _collect(subjects, alphas, store, config_id) -> tuple[list, list]:
-    """Per-subject result dicts of the pairs in the sweep, and the failures."""
-    results, failures = [], []
+def _collect(subjects, alphas, store, config_id) -> list[SubjectResults]:
+    """Per subject, the stored results of the pairs in the sweep."""
+    results = []
     for s in subjects:
-        entry = {"subject": s.name, "alpha2": {}, "failed": {}}
-        for a2 in alphas:
-            data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
-            if data is None:
-                raise RuntimeError(f"result of subject {s.name!r} at alpha2={a2:g} missing")
-            if data["status"] == "ok":
-                entry["alpha2"][str(float(a2))] = data
-            else:
-                entry["failed"][str(float(a2))] = data["error"]
-                failures.append({"subject": s.name, "alpha2": float(a2), "error": data["error"]})
-        ok = entry["alpha2"].values()
-        entry["non_converged_registrations"] = int(
-            sum(d["non_converged_registrations"] for d in ok)
-        )
-        entry["seconds"] = float(sum(d["seconds"] for d in ok))
-        results.append(entry)
-    return results, failures
+        stored = [store.load(s.name, a2, _pair_hash(config_id, s, a2)) for a2 in alphas]
+        if any(r is None for r in stored):
+            a2 = alphas[stored.index(None)]
+            raise RuntimeError(f"result of subject {s.name!r} at alpha2={a2:g} missing")
+        pairs = tuple(r for r in stored if isinstance(r, PairResult))
+        failures = tuple(r for r in stored if isinstance(r, FailedPair))
+        results.append(SubjectResults(s.name, pairs, failures))
+    return results
 
 
 def _pending(subjects, alphas, store, config_id) -> list[tuple[Subject, list[float]]]:
     """Per subject, the alpha^2 without a successful stored result (subjects with none left out)."""
     out = []
     for s in subjects:
-        todo = []
-        for a2 in alphas:
-            data = store.load(s.name, a2, _pair_hash(config_id, s, a2))
-            if data is None or data["status"] != "ok":
-                todo.append(a2)
+        todo = [
+            a2
+            for a2 in alphas
+            if not isinstance(store.load(s.name, a2, _pair_hash(config_id, s, a2)), PairResult)
+        ]
         if todo:
             out.append((s, todo))
     return out
@@ -280,7 +218,7 @@ def run_study(
         Names must be plain file names (no path separator, not ``..``).
     output : path
         Results folder; each pair is stored as soon as it finishes (layout:
-        :mod:`ladders.study.store`). Rerunning resumes; extending the alpha^2 sweep
+        :mod:`ladders.study.running.store`). Rerunning resumes; extending the alpha^2 sweep
         computes only the new pairs; other settings go to another folder. A
         pair that raised is stored with its error and retried on the next run.
     jobs : int
@@ -295,7 +233,7 @@ def run_study(
         Mesh files the cohort was read from; their SHA-256 go into the manifest.
     meshes : bool, default True
         Write each computed pair's shapes and strain maps as ``.vtu`` files under
-        ``output/meshes/<config>`` (:mod:`ladders.study.mesh_outputs`).
+        ``output/meshes/<config>`` (:mod:`ladders.study.meshes.mesh_outputs`).
 
     Returns
     -------
@@ -315,17 +253,20 @@ def run_study(
         (config, atlas, faces, s, todo, store, config_id, mesh_folder)
         for s, todo in _pending(subjects, alphas, store, config_id)
     ]
+    recomputed = dict(store.unusable)
     reports = _run_parallel(tasks, jobs, progress)
     computed = [(r["subject"], a) for r in reports for a in r["computed"]]
     busy = [(r["subject"], a) for r in reports for a in r["busy"]]
     computed += _wait_for_other_runs(
         busy, by_name, store, config, atlas, faces, config_id, mesh_folder
     )
-    results, failures = _collect(subjects, alphas, store, config_id)
+    results = _collect(subjects, alphas, store, config_id)
+    failures = [f for r in results for f in r.failures]
     done_now = set(computed)
     skipped = [(s.name, a) for s in subjects for a in alphas if (s.name, a) not in done_now]
     outcome = StudyOutcome(
-        output, results, computed, skipped, time.perf_counter() - start, failures, config_id
-    )
+        output, results, computed, skipped, time.perf_counter() - start, failures, config_id,
+        recomputed,
+    )  # fmt: skip
     write_manifest(outcome, config, atlas, faces, jobs, data_description or {}, input_files or [])
     return outcome

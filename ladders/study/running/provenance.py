@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .results import RegistrationCounts
 from .store import atomic_write_text
 
 __all__ = ["build_manifest", "write_manifest", "package_versions", "file_sha256"]
@@ -56,24 +57,33 @@ def file_sha256(path: str | Path) -> str:
 
 def _kernel_backend(outcome, config) -> list[str]:
     """Backends that ran this configuration's pairs (asked of the kernel in each worker)."""
-    ran = {d.get("kernel_backend") for r in outcome.results for d in r["alpha2"].values()} - {None}
+    ran = {p.kernel_backend for r in outcome.results for p in r.pairs}
     if ran:
         return sorted(ran)
     return [config.registration.resolved_backend()]
 
 
 def _counts(outcome) -> dict:
-    pairs = [d for r in outcome.results for d in r["alpha2"].values()]
+    pairs = [p for r in outcome.results for p in r.pairs]
+    counts = RegistrationCounts.total(p.counts for p in pairs)
     return {
         "pairs_computed_this_run": len(outcome.computed),
         "pairs_reused": len(outcome.skipped),
-        "failed_pairs": outcome.failures,
+        "pairs_recomputed": [
+            {"subject": name, "alpha2": a2, "reason": why}
+            for (name, a2), why in sorted(outcome.recomputed.items())
+        ],
+        "failed_pairs": [
+            {"subject": f.subject, "alpha2": f.alpha2, "error": f.error} for f in outcome.failures
+        ],
         "failed_subjects": outcome.n_failed_subjects,
         "wall_time_this_run_s": outcome.seconds,
-        "pair_time_total_s": float(sum(d["seconds"] for d in pairs)),
-        "registrations": int(sum(d["n_registrations"] for d in pairs)),
-        "non_converged_registrations": int(sum(d["non_converged_registrations"] for d in pairs)),
-        "optimiser_iterations": int(sum(d.get("n_iterations", 0) for d in pairs)),
+        "pair_time_total_s": float(sum(p.seconds for p in pairs)),
+        "registrations": counts.n_registrations,
+        "non_converged_registrations": counts.non_converged,
+        "optimiser_iterations": counts.n_iterations,
+        "flow_evaluations": counts.n_flow_evaluations,
+        "max_gradient_norm": counts.max_gradient_norm,
     }
 
 

@@ -2,12 +2,13 @@
 
 For every subject and every ``alpha^2`` the study computes, with and without
 residuals, the midpoint ``M``, the reflected end-systole ``s_M(S')`` and the
-pole-ladder transport ``T' = s_T(s_M(S'))`` (Algorithm 1), and the fanning
-scheme's ``T'``. :func:`write_subject_meshes` writes them through meshio
+pole-ladder transport ``T' = s_T(s_M(S'))`` (Algorithm 1), and the ``T'`` of its
+third transport method: the fanning scheme (LDDMM) or the SVF pole ladder by
+conjugation (SVF). :func:`write_subject_meshes` writes them through meshio
 (``.vtu`` by default, legacy ``.vtk`` on request) with per-vertex point data::
 
     meshes/
-        atlas.vtu                              T, written once
+        atlas.vtu                              T, written once (no point data)
         <subject>/
             S.vtu, S_prime.vtu                 the subject's S and S'
             alpha2_<a>/
@@ -15,10 +16,13 @@ scheme's ``T'``. :func:`write_subject_meshes` writes them through meshio
                 pole_ladder_residual_sM_Sprime.vtu    s_M(S')
                 pole_ladder_residual_Tprime.vtu       T'
                 pole_ladder_no_residual_{M,sM_Sprime,Tprime}.vtu
-                fanning_Tprime.vtu                    T' of the fanning scheme
+                fanning_Tprime.vtu                    T' of the fanning scheme (LDDMM)
+                svf_conjugation_Tprime.vtu            T' of the SVF conjugation (SVF)
 
 Point data (every shape is in vertex correspondence with the atlas, so a
-vertex's value is attached to the same material point on every mesh):
+vertex's value is attached to the same material point on every mesh). The
+atlas is shared by all subjects and carries none; every mesh of a subject
+carries ``las_subject``:
 
 ``las_subject``
     Local area strain from ``S`` to ``S'`` (the subject's own motion). On the
@@ -38,27 +42,49 @@ from __future__ import annotations
 
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import meshio
 import numpy as np
 
-from .cohort import MeshFolderError, Subject
-from .pipeline import VARIANTS
+from ..errors import MeshFolderError
 
-__all__ = ["MESH_OUTPUT_FORMATS", "write_point_mesh", "write_subject_meshes", "method_names"]
+if TYPE_CHECKING:
+    from ..cohort import Subject
+    from ..running.results import PairResult
+
+__all__ = [
+    "MESH_OUTPUT_FORMATS",
+    "TransportShapes",
+    "write_point_mesh",
+    "write_subject_meshes",
+    "alpha_folder",
+]
 
 #: Extensions of the mesh files a study can write.
 MESH_OUTPUT_FORMATS = (".vtu", ".vtk")
 
-_SHAPE_FILES = {"midpoint": "M", "reflected": "sM_Sprime", "pole_ladder": "Tprime"}
 
+@dataclass(frozen=True)
+class TransportShapes:
+    """The shapes of one transport method at one ``alpha^2``, each ``(k, 3)``.
 
-def method_names() -> dict[str, str]:
-    """Transport method name in file names, keyed by the result's variant key."""
-    names = {variant: f"pole_ladder_{variant}" for variant in VARIANTS}
-    names["fanning"] = "fanning"
-    return names
+    Attributes
+    ----------
+    method : str
+        The transport method (``"pole_ladder_residual"``, ``"fanning"``, ...).
+    transported : array
+        ``T'``.
+    midpoint, reflected : array or None
+        ``M`` and ``s_M(S')`` of a pole ladder (None for the other methods).
+    """
+
+    method: str
+    transported: np.ndarray
+    midpoint: np.ndarray | None = None
+    reflected: np.ndarray | None = None
 
 
 def write_point_mesh(path, vertices, faces, point_data: dict | None = None) -> Path:
@@ -107,29 +133,35 @@ def write_point_mesh(path, vertices, faces, point_data: dict | None = None) -> P
 
 
 def alpha_folder(alpha2) -> str:
-    """Name of the folder of one ``alpha^2`` (a number or its string key), e.g. ``alpha2_0.01``."""
+    """Name of the folder of one ``alpha^2``, e.g. ``alpha2_0.01``."""
     return f"alpha2_{float(alpha2):g}"
 
 
 def write_subject_meshes(
-    folder, subject: Subject, atlas, faces, result: dict, ext: str = ".vtu"
+    folder,
+    subject: Subject,
+    atlas,
+    faces,
+    result: PairResult,
+    shapes: list[TransportShapes],
+    ext: str = ".vtu",
 ) -> list[Path]:
-    """Write one subject's shapes and strain maps (layout in the module docstring).
+    """Write one subject's shapes and strain maps at one ``alpha^2`` (layout above).
 
     Parameters
     ----------
     folder : str or Path
-        The meshes folder (``<study output>/meshes``); created if needed. The
-        atlas is written there unless it already exists.
+        The meshes folder (``<study output>/meshes/<config>``); created if
+        needed. The atlas is written there unless it already exists.
     subject : Subject
         ``name``, ``ed`` (``S``) and ``es`` (``S'``), each ``(k, 3)``.
     atlas : array_like, shape (k, 3)
         The atlas ``T``.
     faces : array_like of int, shape (f, 3)
-    result : dict
-        The output of :func:`ladders.study.pipeline.run_subject` called with
-        ``keep_shapes=True``. Its ``"shapes"`` entry is removed (so the result
-        is JSON-ready again); its per-``alpha^2`` ``"las"`` lists give the strains.
+    result : PairResult
+        The pair's result: the subject's strain and each transport's strain.
+    shapes : list of TransportShapes
+        The shapes of each transport method of ``result``.
     ext : {".vtu", ".vtk"}
 
     Returns
@@ -137,38 +169,29 @@ def write_subject_meshes(
     list of Path
         The files written.
     """
-    if "shapes" not in result:
-        raise MeshFolderError(
-            "result: no 'shapes' entry; call run_subject(..., keep_shapes=True) to write meshes"
-        )
-    shapes = result.pop("shapes")
     folder = Path(folder)
     atlas = np.asarray(atlas, dtype=np.float64)
     written = []
     if not (folder / f"atlas{ext}").exists():
         written.append(write_point_mesh(folder / f"atlas{ext}", atlas, faces))
     base = folder / subject.name
-    first = next(iter(result["alpha2"].values()))
-    las_subject = np.asarray(first["las"]["subject"])
+    las_subject = np.asarray(result.las_subject)
     motion = {"las_subject": las_subject, "displacement": subject.es - subject.ed}
     written.append(write_point_mesh(base / f"S{ext}", subject.ed, faces, motion))
     written.append(write_point_mesh(base / f"S_prime{ext}", subject.es, faces, motion))
-    for key, node in result["alpha2"].items():
-        sub = base / alpha_folder(key)
-        for variant, method in method_names().items():
-            las_t = np.asarray(node["las"][variant])
-            data = {
-                "las_subject": las_subject,
-                "las_transported": las_t,
-                "las_difference": las_t - las_subject,
-            }
-            points = dict(shapes[key][variant])
-            if "transported" in points:  # the fanning scheme: T' only
-                points = {"pole_ladder": points.pop("transported")}
-            for shape, label in _SHAPE_FILES.items():
-                if shape not in points:
-                    continue
-                extra = {"displacement": points[shape] - atlas} if shape == "pole_ladder" else {}
-                path = sub / f"{method}_{label}{ext}"
-                written.append(write_point_mesh(path, points[shape], faces, {**data, **extra}))
+    sub = base / alpha_folder(result.alpha2)
+    for shape in shapes:
+        las_t = np.asarray(result.transport(shape.method).las)
+        data = {
+            "las_subject": las_subject,
+            "las_transported": las_t,
+            "las_difference": las_t - las_subject,
+        }
+        moved = {"displacement": np.asarray(shape.transported) - atlas}
+        path = sub / f"{shape.method}_Tprime{ext}"
+        written.append(write_point_mesh(path, shape.transported, faces, {**data, **moved}))
+        for label, points in (("M", shape.midpoint), ("sM_Sprime", shape.reflected)):
+            if points is not None:
+                path = sub / f"{shape.method}_{label}{ext}"
+                written.append(write_point_mesh(path, points, faces, data))
     return written

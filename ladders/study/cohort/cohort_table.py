@@ -18,13 +18,10 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-from .cohort import Cohort, MeshFolderError
-from .mesh_io import (
-    MESH_EXTENSIONS,
-    OTHER_MESH_EXTENSIONS,
-    assemble_cohort,
-    warn_unused,
-)
+from ..errors import MeshFolderError, MissingAtlasError
+from ..meshes.mesh_io import MESH_EXTENSIONS, OTHER_MESH_EXTENSIONS
+from .cohort import Cohort
+from .mesh_folder import assemble_cohort, warn_unused
 
 __all__ = ["read_cohort_table"]
 
@@ -83,10 +80,7 @@ def _atlas_next_to(table: Path) -> Path:
     ]  # fmt: skip
     if len(found) != 1:
         what = "no" if not found else f"{len(found)} ({', '.join(p.name for p in found)})"
-        raise MeshFolderError(
-            f"{table}: {what} atlas file 'atlas.<ext>' next to the table; "
-            "name the atlas with atlas=PATH (--atlas PATH)"
-        )
+        raise MissingAtlasError(f"{table}: {what} atlas file 'atlas.<ext>' next to the table")
     return found[0]
 
 

@@ -6,7 +6,7 @@ than LDDMM. With both studies run on the same subjects and settings
 (``symladders study --deformation both``), each measure is compared subject by
 subject: ``SVF - LDDMM`` per subject, the fraction of subjects where SVF is
 lower, the median difference with a 95 % bootstrap interval and the Wilcoxon
-signed-rank p-value (:func:`ladders.study.statistics.paired_comparison`).
+signed-rank p-value (:func:`ladders.study.reporting.statistics.paired_comparison`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import io
 
 import numpy as np
 
-from .pipeline import ERROR_NAMES, VARIANTS
+from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
 from .statistics import paired_comparison
 
 __all__ = ["MEASURES", "compare_deformations", "comparison_markdown", "comparison_csv"]
@@ -24,30 +24,27 @@ __all__ = ["MEASURES", "compare_deformations", "comparison_markdown", "compariso
 #: ``(variant, measure)`` compared; ``None`` for the registration measures shared by the variants.
 MEASURES = (
     *((v, e) for v in VARIANTS for e in (*ERROR_NAMES, "ase")),
-    (None, "registration_error"),
-    (None, "rkhs_norm"),
-    (None, "inverse_consistency"),
+    *((None, m) for m in REGISTRATION_MEASURES),
 )
 
 
-def _values(results: list[dict], key: str, variant, measure) -> dict[str, float]:
+def _values(results: list, alpha2: float, variant, measure) -> dict[str, float]:
+    """``{subject: value}`` over the subjects with a result at ``alpha2``."""
     out = {}
     for r in results:
-        pair = r["alpha2"].get(key)
+        pair = r.at(alpha2)
         if pair is not None:
-            out[r["subject"]] = float(pair[measure] if variant is None else pair[variant][measure])
+            out[r.subject] = pair.measure(variant or VARIANTS[0], measure)
     return out
 
 
-def compare_deformations(
-    lddmm: list[dict], svf: list[dict], seed: int = 0, n_boot: int = 2000
-) -> list[dict]:
+def compare_deformations(lddmm: list, svf: list, seed: int = 0, n_boot: int = 2000) -> list[dict]:
     """One row per ``(alpha^2, variant, measure)``: means and the paired ``SVF - LDDMM``.
 
     Parameters
     ----------
-    lddmm, svf : lists of per-subject result dicts
-        :attr:`ladders.study.runner.StudyOutcome.results` of the two studies;
+    lddmm, svf : lists of SubjectResults
+        :attr:`ladders.study.running.runner.StudyOutcome.results` of the two studies;
         subjects are matched by name, and a subject missing from either (a
         failed pair) is left out of that ``alpha^2``.
     seed : int
@@ -62,9 +59,9 @@ def compare_deformations(
         median_difference, ci_low, ci_high, wilcoxon_p``.
     """
     rng = np.random.default_rng(seed)
-    keys = sorted({k for r in lddmm for k in r["alpha2"]} & {k for r in svf for k in r["alpha2"]})
+    keys = sorted({a for r in lddmm for a in r.alpha2} & {a for r in svf for a in r.alpha2})
     rows = []
-    for key in sorted(keys, key=float):
+    for key in keys:
         for variant, measure in MEASURES:
             a = _values(lddmm, key, variant, measure)
             b = _values(svf, key, variant, measure)
@@ -74,7 +71,7 @@ def compare_deformations(
             stats = paired_comparison(x, y, rng, n_boot=n_boot)
             rows.append(
                 {
-                    "alpha2": float(key),
+                    "alpha2": key,
                     "variant": variant or "registration",
                     "measure": measure,
                     "n": stats["n"],

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cohort import MeshFolderError
+from ..errors import MeshFolderError
 
 __all__ = ["read_vtp"]
 

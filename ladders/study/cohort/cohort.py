@@ -3,16 +3,20 @@
 A :class:`Cohort` holds what the paper's Section 3 study needs: a population
 atlas ``T`` and, per subject, an end-diastole shape ``S`` and an end-systole
 shape ``S'``, all meshes in vertex correspondence (one shared ``faces`` array).
-Cohorts come from a folder of meshes (:func:`ladders.study.mesh_io.read_cohort`) or
-from the synthetic generator :func:`ladders.study.synthetic_lv.make_synthetic_cohort`.
+Cohorts come from a folder of meshes (:func:`ladders.study.cohort.read_cohort`), a
+table (:func:`ladders.study.cohort.read_cohort_table`) or the synthetic generator
+:func:`ladders.study.cohort.make_synthetic_cohort`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..errors import CohortError, MeshFolderError
 
 __all__ = [
     "CohortError",
@@ -22,27 +26,21 @@ __all__ = [
 ]
 
 
-class CohortError(ValueError):
-    """Inconsistent cohort: shapes, faces or vertex counts do not correspond."""
-
-
-class MeshFolderError(CohortError):
-    """A mesh file or a cohort folder cannot be read or does not correspond."""
-
-
 @dataclass
 class Subject:
     """One subject: end-diastole ``ed`` and end-systole ``es`` vertices, each ``(k, 3)``.
 
     ``parameters`` holds whatever produced the shapes, e.g. the
-    :class:`ladders.study.synthetic_lv.SubjectParameters` of a synthetic subject
-    (``None`` for meshes read from files).
+    :class:`ladders.study.cohort.SubjectParameters` of a synthetic subject
+    (``None`` for meshes read from files); ``files`` the ED and ES files the
+    shapes were read from (empty for generated shapes).
     """
 
     name: str
     ed: np.ndarray
     es: np.ndarray
     parameters: Any = None
+    files: tuple = ()
 
 
 @dataclass
@@ -59,12 +57,15 @@ class Cohort:
         Per-subject end-diastole ``S`` and end-systole ``S'`` vertices, ``(k, 3)`` each.
     source : str
         Where the cohort comes from (generator call or folder).
+    atlas_file : Path or None
+        The file the atlas was read from (None for a generated atlas).
     """
 
     atlas: np.ndarray
     faces: np.ndarray
     subjects: list[Subject] = field(default_factory=list)
     source: str = ""
+    atlas_file: Path | None = None
 
     def __post_init__(self):
         self.atlas = _vertices(self.atlas, "atlas")
@@ -99,27 +100,31 @@ class Cohort:
         """Subject names, in cohort order."""
         return [s.name for s in self.subjects]
 
+    def _stacked(self, phase: str) -> np.ndarray:
+        if not self.subjects:
+            return np.empty((0, self.n_vertices, 3))
+        return np.stack([getattr(s, phase) for s in self.subjects])
+
     @property
     def ed(self) -> np.ndarray:
         """End-diastole shapes stacked, shape ``(n, k, 3)``."""
-        return (
-            np.stack([s.ed for s in self.subjects])
-            if self.subjects
-            else np.empty((0, self.n_vertices, 3))
-        )
+        return self._stacked("ed")
 
     @property
     def es(self) -> np.ndarray:
         """End-systole shapes stacked, shape ``(n, k, 3)``."""
-        return (
-            np.stack([s.es for s in self.subjects])
-            if self.subjects
-            else np.empty((0, self.n_vertices, 3))
-        )
+        return self._stacked("es")
+
+    @property
+    def input_files(self) -> list[Path]:
+        """The files the cohort was read from: the atlas, then each subject's ED and ES."""
+        atlas = [self.atlas_file] if self.atlas_file is not None else []
+        return [Path(p) for p in (*atlas, *(f for s in self.subjects for f in s.files))]
 
     def head(self, n: int) -> Cohort:
         """The cohort restricted to its first ``n`` subjects."""
-        return Cohort(self.atlas, self.faces, list(self.subjects[:n]), self.source)
+        subjects = list(self.subjects[:n])
+        return Cohort(self.atlas, self.faces, subjects, self.source, self.atlas_file)
 
 
 def _vertices(x, name: str) -> np.ndarray:

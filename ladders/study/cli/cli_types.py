@@ -9,14 +9,18 @@ what was expected and what was given. Exit statuses of ``symladders``:
 * ``3``: internal error: one line says so and where the full traceback was
   written (``symladders-error.log`` in the output folder, or a temporary file
   when the output folder cannot be written);
-* ``130``: interrupted (Ctrl-C).
+* ``130``: interrupted (Ctrl-C);
+* ``141``: standard output was closed by its reader (``symladders study | head``):
+  the command ends quietly, as standard tools do on SIGPIPE.
 """
 
 from __future__ import annotations
 
 import argparse
+import difflib
 import math
 import os
+import re
 import socket
 import tempfile
 import traceback
@@ -27,8 +31,10 @@ __all__ = [
     "EXIT_USAGE",
     "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
+    "EXIT_BROKEN_PIPE",
     "UsageError",
     "OneLineParser",
+    "DefaultsFormatter",
     "positive_int",
     "nonnegative_int",
     "jobs_count",
@@ -43,6 +49,7 @@ __all__ = [
 EXIT_USAGE = 2
 EXIT_INTERNAL = 3
 EXIT_INTERRUPTED = 130
+EXIT_BROKEN_PIPE = 141
 ERROR_LOG = "symladders-error.log"
 
 
@@ -54,12 +61,44 @@ class OneLineParser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (``prog: error: message``).
 
     Instead of printing the usage and exiting, :meth:`error` raises
-    :class:`UsageError`, which the entry point reports on standard error.
+    :class:`UsageError`, which the entry point reports on standard error. A
+    mistyped subcommand is answered with the closest one. Options must be
+    spelled in full (``allow_abbrev=False``: ``--mesh`` is not ``--meshes``).
     Subcommand parsers created by ``add_subparsers`` inherit the class.
     """
 
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str):
+        wrong = re.match(r"argument (\w+): invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        commands = self._subcommands()
+        if wrong and wrong.group(1) == "command" and commands:
+            close = difflib.get_close_matches(wrong.group(2), commands, n=1, cutoff=0.5)
+            if close:
+                raise UsageError(
+                    f"{self.prog}: error: unknown command {wrong.group(2)!r}; did you mean "
+                    f"{close[0]!r}? (see {self.prog} {close[0]} --help)"
+                )
+            message = f"unknown command {wrong.group(2)!r}, choose from {', '.join(commands)}"
         raise UsageError(f"{self.prog}: error: {message} (see {self.prog} --help)")
+
+    def _subcommands(self) -> list[str]:
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                return list(action.choices)
+        return []
+
+
+class DefaultsFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Help with each option's default, except where there is none to show
+    (``None`` or a ``False`` switch) or the help text already gives it."""
+
+    def _get_help_string(self, action) -> str:
+        if action.default is None or action.default is False or "%(default)" in (action.help or ""):
+            return action.help or ""
+        return super()._get_help_string(action)
 
 
 def _integer(text: str) -> int:
@@ -190,14 +229,21 @@ def log_internal_error(exc: BaseException, output: str | None) -> Path:
     return Path(name)
 
 
-def check_grid_sigma(points, sigma: float, control_points: str) -> None:
+def check_grid_sigma(points, settings) -> None:
     """Before a study starts: refuse a ``--sigma`` whose control-point grid exceeds the budget.
+
+    Parameters
+    ----------
+    points : array, shape (k, 3)
+        The atlas.
+    settings : manifolds.lddmm.RegistrationSettings
+        The study's registration settings (kernel width, policy, budget).
 
     Raises :class:`~manifolds.errors.ManifoldError` (naming sigma, the shape's
     extent and the count) for the policies that build a grid (``"grid"``, ``"finegrid"``).
     """
-    from manifolds.lddmm.control_points import MAX_CONTROL_POINTS, check_grid_budget, grid_spacing
+    from manifolds.lddmm.control_points import check_grid_budget, grid_spacing
 
-    spacing = grid_spacing(control_points, sigma)
+    spacing = grid_spacing(settings.control_points_policy, settings.sigma)
     if spacing is not None:
-        check_grid_budget(points, spacing, MAX_CONTROL_POINTS)
+        check_grid_budget(points, spacing, settings.max_control_points)

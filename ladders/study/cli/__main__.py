@@ -1,0 +1,7 @@
+"""``python -m ladders.study.cli``: the ``symladders`` command."""
+
+import sys
+
+from .entry import main
+
+sys.exit(main())

@@ -1,0 +1,193 @@
+"""The flags of ``symladders study``: the cohort, the deformation model and the run."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from .cli_types import (
+    existing_folder,
+    jobs_count,
+    nonnegative_int,
+    output_folder,
+    positive_float,
+    positive_int,
+    scheduler_address,
+)
+
+__all__ = [
+    "add_study_arguments",
+    "DEFAULT_ALPHA2",
+    "FULL_ALPHA2",
+    "DEFAULT_SUBJECTS",
+    "FULL_SUBJECTS",
+    "DEFAULT_VERTICES",
+]
+
+FULL_ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
+DEFAULT_ALPHA2 = FULL_ALPHA2
+DEFAULT_SUBJECTS = 20
+FULL_SUBJECTS = 138
+DEFAULT_VERTICES = 1009
+
+
+def _floats(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from exc
+    if not values or any(not np.isfinite(v) or v <= 0 for v in values):
+        raise argparse.ArgumentTypeError(f"expected positive numbers, got {text!r}")
+    return values
+
+
+def add_study_arguments(p) -> None:
+    """Add the flags of ``symladders study`` to the parser ``p``."""
+    _add_input_arguments(p)
+    _add_model_arguments(p)
+    _add_run_arguments(p)
+
+
+def _add_input_arguments(p) -> None:
+    """Flags choosing the cohort and the output folder."""
+    p.add_argument(
+        "--output",
+        "-o",
+        type=output_folder,
+        default="symladders-output/study",
+        help="results folder",
+    )
+    source = p.add_mutually_exclusive_group()
+    source.add_argument(
+        "--meshes",
+        type=existing_folder,
+        default=None,
+        help="folder of meshes (atlas.<ext>, <subject>_ed.<ext>, <subject>_es.<ext>; "
+        "PLY/OBJ/STL/OFF/VTK/VTU/VTP) instead of the built-in synthetic cohort",
+    )
+    source.add_argument(
+        "--cohort",
+        type=Path,
+        default=None,
+        help="CSV table with the columns subject, ed, es (mesh paths relative to the table) "
+        "instead of the built-in synthetic cohort",
+    )
+    p.add_argument(
+        "--atlas",
+        type=Path,
+        default=None,
+        help="atlas mesh (with --meshes or --cohort); default: atlas.<ext> in the folder "
+        "or next to the table",
+    )
+    p.add_argument(
+        "--subjects",
+        type=positive_int,
+        default=None,
+        help=f"number of subjects: {DEFAULT_SUBJECTS} of the built-in cohort ({FULL_SUBJECTS} with "
+        "--full), or the first N of --meshes or --cohort (default: all of them; more than "
+        "they hold is an error)",
+    )
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help=f"the paper's setting: {FULL_SUBJECTS} subjects and the 7-value alpha^2 sweep",
+    )
+    p.add_argument(
+        "--alpha2",
+        type=_floats,
+        default=None,
+        help="comma-separated alpha^2 values (eq. 3); default: "
+        f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)}",
+    )
+    p.add_argument(
+        "--vertices",
+        type=positive_int,
+        default=DEFAULT_VERTICES,
+        help="vertices of the built-in meshes, rounded to their grid of 1 + n_longitude x "
+        "n_latitude vertices (the count used is printed)",
+    )
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
+
+
+def _add_model_arguments(p) -> None:
+    """Flags of the deformation model, the registration and the transports."""
+    p.add_argument(
+        "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
+    )
+    p.add_argument(
+        "--control-points",
+        choices=("grid", "finegrid", "dense"),
+        default="grid",
+        help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices",
+    )
+    p.add_argument(
+        "--optimize-control-points",
+        action="store_true",
+        help="optimise the control points with the momenta (eq. 3), starting from the grid",
+    )
+    p.add_argument(
+        "--distance",
+        choices=("rms", "frobenius", "mean"),
+        default="rms",
+        help="unit of the errors: per-vertex RMS (the paper's mm), Frobenius or mean distance",
+    )
+    p.add_argument(
+        "--integrator",
+        choices=("euler", "rk2", "rk4"),
+        default="euler",
+        help="time integrator of the flows, used by the registrations, the shooting and the "
+        "fanning scheme",
+    )
+    p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
+    p.add_argument(
+        "--max-iter", type=positive_int, default=2000, help="L-BFGS-B iterations per registration"
+    )
+    p.add_argument(
+        "--ftol",
+        type=positive_float,
+        default=1e-11,
+        help="L-BFGS-B tolerance on the relative decrease of the objective",
+    )
+    p.add_argument(
+        "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
+    )
+    p.add_argument(
+        "--deformation",
+        choices=("lddmm", "svf", "both"),
+        default="lddmm",
+        help="deformation model: LDDMM geodesics, stationary velocity fields (docs/svf.md), or "
+        "both (run into OUTPUT/lddmm and OUTPUT/svf, compared in OUTPUT/comparison.md)",
+    )
+    p.add_argument(
+        "--kernel-backend",
+        choices=("auto", "numpy", "numba"),
+        default="auto",
+        help="kernel sums: 'auto' uses numba when it imports, else numpy (the reference)",
+    )
+
+
+def _add_run_arguments(p) -> None:
+    """Flags of the execution: kernels, parallelism, progress, mesh outputs."""
+    p.add_argument(
+        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
+    )
+    p.add_argument(
+        "--backend",
+        choices=("loky", "dask"),
+        default="loky",
+        help="joblib backend; 'dask' runs subjects on a Dask cluster (extra 'cluster')",
+    )
+    p.add_argument(
+        "--scheduler",
+        type=scheduler_address,
+        default=None,
+        help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--no-meshes",
+        action="store_true",
+        help="do not write the .vtu meshes (M, s_M(S'), T' and strain maps) under OUTPUT/meshes",
+    )

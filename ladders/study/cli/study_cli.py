@@ -1,0 +1,272 @@
+"""``symladders study``: the paper's Section 3 study on the built-in cohort or a folder of meshes."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from .cli_types import DefaultsFormatter, UsageError, check_grid_sigma
+from .study_arguments import (
+    DEFAULT_ALPHA2,
+    DEFAULT_SUBJECTS,
+    FULL_ALPHA2,
+    FULL_SUBJECTS,
+    add_study_arguments,
+)
+
+__all__ = ["add_study_parser", "run_study_command"]
+
+
+def add_study_parser(sub) -> None:
+    """Register the ``study`` subcommand on an argparse subparsers object."""
+    p = sub.add_parser(
+        "study",
+        help="the paper's study: symmetry errors over alpha^2, pole ladder vs fanning, area strain",
+        description=(
+            "Run the study of the paper's Section 3. Without --meshes it uses the built-in "
+            f"synthetic cohort ({DEFAULT_SUBJECTS} subjects, alpha^2 in "
+            f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)} by default; --full gives the paper's "
+            f"setting: {FULL_SUBJECTS} subjects and alpha^2 in "
+            f"{','.join(f'{a:g}' for a in FULL_ALPHA2)}). Results are written per subject as "
+            "they finish; rerunning with the same output folder resumes and computes only the "
+            "missing (subject, alpha^2) pairs."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    add_study_arguments(p)
+    p.set_defaults(run=run_study_command)
+
+
+def _load_cohort(args):
+    from ..cohort import (
+        MissingAtlasError,
+        UnusedMeshFilesWarning,
+        make_synthetic_cohort,
+        read_cohort,
+        read_cohort_table,
+    )
+
+    n = args.subjects
+    if args.atlas is not None and args.meshes is None and args.cohort is None:
+        raise UsageError("symladders study: --atlas needs --meshes FOLDER or --cohort TABLE")
+    if args.meshes is not None or args.cohort is not None:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UnusedMeshFilesWarning)
+            try:
+                if args.meshes is not None:
+                    cohort = read_cohort(args.meshes, atlas=args.atlas)
+                    description = {"source": "folder", "folder": str(args.meshes.resolve())}
+                else:
+                    cohort = read_cohort_table(args.cohort, atlas=args.atlas)
+                    description = {"source": "table", "table": str(args.cohort.resolve())}
+            except MissingAtlasError as exc:
+                raise UsageError(
+                    f"symladders study: error: {exc.with_hint('--atlas PATH')}"
+                ) from None
+        for w in caught:  # one readable line each, not a source location
+            if issubclass(w.category, UnusedMeshFilesWarning):
+                print(f"symladders study: warning: {w.message}", file=sys.stderr)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        if args.atlas is not None:
+            description["atlas"] = str(args.atlas.resolve())
+        if n is not None and n > len(cohort):
+            where = "--meshes folder" if args.meshes is not None else "--cohort table"
+            raise UsageError(
+                f"symladders study: error: --subjects {n}: the {where} holds only "
+                f"{len(cohort)} subject(s) (leave --subjects out to use all of them)"
+            )
+        if n is not None:
+            cohort = cohort.head(n)
+    else:
+        if n is None:
+            n = FULL_SUBJECTS if args.full else DEFAULT_SUBJECTS
+        cohort = make_synthetic_cohort(n_subjects=n, n_vertices=args.vertices, seed=args.seed)
+        description = {
+            "source": "synthetic",
+            "generator": cohort.source,
+            "seed": args.seed,
+            "vertices": int(cohort.n_vertices),
+        }
+    if len(cohort) == 0:
+        raise SystemExit("symladders study: the cohort has no subject")
+    return cohort, description
+
+
+@contextlib.contextmanager
+def _backend(args):
+    if args.backend != "dask":
+        yield
+        return
+    try:
+        from dask.distributed import Client
+        from joblib import parallel_config
+    except ImportError as exc:
+        raise SystemExit(
+            "symladders study: --backend dask needs the optional extra: "
+            "pip install 'symladders[cluster]'"
+        ) from exc
+    client = Client(args.scheduler) if args.scheduler else Client(processes=True)
+    try:
+        with parallel_config(backend="dask"):
+            yield
+    finally:
+        client.close()
+
+
+def _note_pairs_without_meshes(outcome) -> None:
+    """Tell which resumed pairs have no mesh files (they were computed with --no-meshes)."""
+    from ..meshes.mesh_outputs import alpha_folder
+
+    root = Path(outcome.output) / "meshes" / outcome.config_id
+    bare = [(n, a) for n, a in outcome.skipped if not (root / n / alpha_folder(a)).is_dir()]
+    if bare:
+        print(
+            f"note: {len(bare)} skipped (subject, alpha^2) pair(s) have no mesh files (computed "
+            f"with --no-meshes); delete their files under {Path(outcome.output) / 'results'} "
+            "to compute them again with meshes"
+        )
+
+
+def _input_files(args, cohort) -> list | None:
+    """The files the cohort was read from, exactly (hashed into the manifest): the table
+    with ``--cohort``, the atlas and the subjects' meshes; ``None`` for the built-in one."""
+    files = list(cohort.input_files)
+    if args.cohort is not None:
+        files.append(Path(args.cohort))
+    return sorted({Path(f).resolve() for f in files}) or None
+
+
+def _config(args, deformation: str):
+    from ..running import StudyConfig
+
+    alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
+    return StudyConfig.build(
+        alpha2=tuple(alpha2),
+        sigma=args.sigma,
+        control_points=args.control_points,
+        integrator=args.integrator,
+        n_steps=args.n_steps,
+        max_iter=args.max_iter,
+        ftol=args.ftol,
+        fanning_steps=args.fanning_steps,
+        kernel_backend=args.kernel_backend,
+        deformation=deformation,
+        distance=args.distance,
+        optimize_control_points=args.optimize_control_points,
+    )
+
+
+def _run_one(args, cohort, description, config, output: Path):
+    """Run (or resume) one study into ``output``, write its report, print its summary."""
+    from ..reporting import summarize, terminal_summary, write_report
+    from ..running import RegistrationCounts, run_study
+
+    print(
+        f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "
+        f"{config.deformation}, alpha^2 = {', '.join(f'{a:g}' for a in config.alpha2)}, "
+        f"output {output}"
+    )
+    with _backend(args):
+        outcome = run_study(
+            config,
+            cohort.atlas,
+            cohort.faces,
+            cohort.subjects,
+            output,
+            jobs=args.jobs,
+            progress=not args.no_progress,
+            data_description=description,
+            meshes=not args.no_meshes,
+            input_files=_input_files(args, cohort),
+        )
+    _note_recomputed(outcome)
+    if outcome.skipped:
+        print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
+        if not args.no_meshes:
+            _note_pairs_without_meshes(outcome)
+    shapes = {s.name: s.ed for s in cohort.subjects}
+    paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, shapes)
+    pairs = [p for r in outcome.results for p in r.pairs]
+    if pairs:
+        print()
+        print(terminal_summary(summarize(outcome.results), pairs[0].unit, len(cohort)))
+    counts = RegistrationCounts.total(p.counts for p in pairs)
+    print(
+        f"Registrations: {counts.n_registrations}; {counts.non_converged} stopped at the "
+        f"iteration limit (--max-iter {config.registration.max_iter}) before meeting the "
+        "optimiser's tolerance."
+    )
+    if "maps_subject" in paths:
+        print(f"Fig. 5b shows subject {paths.pop('maps_subject')} (median ASE).")
+    print("Full tables and figures:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
+    return outcome
+
+
+def _note_recomputed(outcome) -> None:
+    """Say which stored results could not be used and were computed again, and why."""
+    if not outcome.recomputed:
+        return
+    reasons = sorted(set(outcome.recomputed.values()))
+    print(
+        f"note: {len(outcome.recomputed)} stored (subject, alpha^2) result(s) were computed "
+        f"again: {'; '.join(reasons)}",
+        file=sys.stderr,
+    )
+
+
+def _write_comparison(outcomes: dict, output: Path) -> Path:
+    from ..reporting.deformation_comparison import (
+        compare_deformations,
+        comparison_csv,
+        comparison_markdown,
+    )
+    from ..running.store import atomic_write_text
+
+    rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
+    units = [p.unit for r in outcomes["lddmm"].results for p in r.pairs]
+    text = comparison_markdown(rows, units[0] if units else "mm")
+    atomic_write_text(output / "comparison.csv", comparison_csv(rows))
+    atomic_write_text(output / "comparison.md", text)
+    print(text)
+    return output / "comparison.md"
+
+
+def run_study_command(args) -> int:
+    """Run the study from parsed command-line arguments.
+
+    With ``--deformation both`` the LDDMM and the SVF studies run into
+    ``OUTPUT/lddmm`` and ``OUTPUT/svf`` and ``OUTPUT/comparison.md`` (and
+    ``.csv``) compares them subject by subject.
+    """
+    start = time.perf_counter()
+    cohort, description = _load_cohort(args)
+    output = Path(args.output)
+    models = ("lddmm", "svf") if args.deformation == "both" else (args.deformation,)
+    if args.optimize_control_points and "svf" in models:
+        raise UsageError(
+            "symladders study: --optimize-control-points works with --deformation lddmm only"
+        )
+    configs = {model: _config(args, model) for model in models}
+    for config in configs.values():  # the registration settings are the whole configuration
+        check_grid_sigma(cohort.atlas, config.registration)
+    outcomes = {}
+    for model, config in configs.items():
+        folder = output / model if len(models) > 1 else output
+        outcomes[model] = _run_one(args, cohort, description, config, folder)
+    if len(models) > 1:
+        print("Comparison:", _write_comparison(outcomes, output))
+    print(f"Total wall time {time.perf_counter() - start:.1f} s")
+    failed = [(m, o) for m, o in outcomes.items() if o.failures]
+    for model, o in failed:
+        print(
+            f"symladders study: {o.n_failed_subjects} subject(s) failed "
+            f"({len(o.failures)} pair(s)){f' ({model})' if len(models) > 1 else ''}; "
+            "errors in summary.md and the result files",
+            file=sys.stderr,
+        )
+    return 1 if failed else 0

@@ -1,0 +1,44 @@
+"""``symladders validate``: the analytic validation of the ladders on closed-form spaces."""
+
+from __future__ import annotations
+
+from .cli_types import DefaultsFormatter, nonnegative_int, output_folder
+
+__all__ = ["add_validate_parser", "run_validate_command"]
+
+
+def add_validate_parser(sub) -> None:
+    """Register the ``validate`` subcommand on an argparse subparsers object."""
+    p = sub.add_parser(
+        "validate",
+        help="analytic validation of ladders and symmetry errors on closed-form spaces",
+        description=(
+            "Run the ladders and the symmetry estimators on spaces with known answers "
+            "(sphere, hyperbolic space, SPD matrices, Poincare half-plane, warped surface), "
+            "print errors and measured convergence slopes, and write validation.json, "
+            "validation.md and convergence.png to the output folder."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    p.add_argument(
+        "--output",
+        "-o",
+        type=output_folder,
+        default="symladders-output/validation",
+        help="output folder",
+    )
+    p.add_argument(
+        "--seed", type=nonnegative_int, default=0, help="seed of the random configurations"
+    )
+    p.add_argument("--quick", action="store_true", help="fewer trials and rungs (seconds)")
+    p.set_defaults(run=run_validate_command)
+
+
+def run_validate_command(args) -> int:
+    """Run the analytic validation from parsed command-line arguments."""
+    from ..analytic_validation import run_validation
+
+    report = run_validation(args.output, seed=args.seed, quick=args.quick)
+    print(report.to_markdown())
+    print(f"\nWritten to {args.output}/ (validation.json, validation.md, convergence.png)")
+    return 0

@@ -1,0 +1,24 @@
+"""Reporting the study: tables, paired statistics, figures and the LDDMM-SVF comparison.
+
+- :mod:`.report`: the Table-1-style summary and :func:`write_report`;
+- :mod:`.statistics`: the tidy table and the paired comparison;
+- :mod:`.figures`: Fig. 4, Fig. 5a and Fig. 5b;
+- :mod:`.deformation_comparison`: LDDMM against SVF on the same subjects.
+"""
+
+from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
+from .report import summarize, summary_markdown, terminal_summary, write_report
+from .statistics import paired_comparison, paired_statistics, tidy_rows
+
+__all__ = [
+    "summarize",
+    "summary_markdown",
+    "terminal_summary",
+    "write_report",
+    "paired_comparison",
+    "paired_statistics",
+    "tidy_rows",
+    "compare_deformations",
+    "comparison_csv",
+    "comparison_markdown",
+]

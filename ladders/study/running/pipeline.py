@@ -1,0 +1,308 @@
+"""The paper's Section 3 study: symmetry errors over alpha^2, pole ladder vs fanning, area strain.
+
+For every subject ``(S, S')`` (end-diastole, end-systole), the atlas ``T`` and
+every ``alpha^2`` of a sweep, with and without residuals:
+
+* the four errors of Section 3 (midpoint distance, centrality, involutivity,
+  transvectivity), through the generic :func:`ladders.symmetry_errors`;
+* the registration error and RKHS norm of ``T -> S`` and the inverse consistency;
+* the pole-ladder transport of the deformation ``S -> S'`` to the atlas
+  (Algorithm 1: ``T' = s_T o s_M (S')``), and the fanning scheme's transport (the
+  SVF pole ladder by conjugation in the SVF study);
+* the local area strain between ``S`` and ``S'`` and between ``T`` and ``T'``,
+  and the area strain error ASE.
+
+Registrations are cached by the LDDMM space, so every registration the
+errors and the ladders share is computed once. :func:`compute_pair` is the one
+computation of a (subject, ``alpha^2``) pair; the results are the typed
+:class:`~ladders.study.running.results.PairResult`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from manifolds.errors import ConvergenceWarning
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, group_pole_ladder
+from manifolds.point_distance import point_distance
+from manifolds.residual import ResidualAugmented
+
+from ...fanning import fanning_transport
+from ...symmetry_errors import symmetry_errors
+from ..area_strain import area_strain, area_strain_error
+from ..cohort import Subject
+from ..meshes.mesh_outputs import MESH_OUTPUT_FORMATS, TransportShapes, write_subject_meshes
+from .results import (
+    ERROR_NAMES,
+    FANNING,
+    POLE_LADDER,
+    SVF_CONJUGATION,
+    VARIANTS,
+    PairResult,
+    RegistrationCounts,
+    RegistrationSummary,
+    SubjectResults,
+    TransportResult,
+    VariantErrors,
+)
+
+__all__ = [
+    "StudyConfig",
+    "DEFAULT_REGISTRATION",
+    "UNITS",
+    "make_space",
+    "compute_pair",
+    "run_subject",
+    "VARIANTS",
+    "ERROR_NAMES",
+]
+#: Unit of the distances of the results, per ``StudyConfig.distance`` (meshes in mm).
+UNITS = {
+    "rms": "mm (per-vertex RMS)",
+    "frobenius": "mm (Frobenius norm over vertices)",
+    "mean": "mm (mean per-vertex distance)",
+}
+
+
+#: Registration settings of the default study (``docs/study.md``, "Settings chosen by
+#: measurement"): 45 grid control points at ``sigma = 20`` mm, Euler, to the optimiser's
+#: tolerance.
+DEFAULT_REGISTRATION = RegistrationSettings(sigma=20.0, control_points="grid", max_iter=2000)
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """Parameters of the study (all of them enter the results' hash).
+
+    Attributes
+    ----------
+    registration : RegistrationSettings
+        Every setting of the registrations: kernel width (in the meshes' units, mm
+        for the built-in cohort), control points (``"grid"``: spacing ``sigma`` over
+        the template's bounding box, ``"finegrid"``: spacing ``sigma / 2``,
+        ``"dense"``: the mesh vertices, :func:`manifolds.lddmm.registration_problem.is_dense`),
+        their optimisation (eq. 3), integrator and
+        steps, solver, stopping rule, tolerances, iteration limit, kernel backend.
+    alpha2 : tuple of float
+        Sweep of the regularisation ``alpha^2`` of eq. 3.
+    fanning_steps : int
+        Steps of the fanning scheme (with the space's integrator; equal to the
+        registration's ``n_steps``, the fanning follows the space's own discrete geodesic).
+    deformation : str
+        ``"lddmm"`` (:class:`~manifolds.lddmm.LDDMMLandmarks`) or ``"svf"``
+        (:class:`~manifolds.lddmm.SVFLandmarks`). The third transport of the study
+        is the fanning scheme (``"fanning"``) with LDDMM, which has a flow of
+        momenta, and the SVF pole ladder by conjugation (``"svf_conjugation"``,
+        ``exp(-v/2) o exp(u) o exp(v/2)``, ``docs/svf.md``) with SVF.
+    distance : str
+        Unit of the errors, the registration error and the inverse consistency:
+        ``"rms"`` (per-vertex RMS distance, the paper's mm), ``"frobenius"`` or ``"mean"``.
+    """
+
+    registration: RegistrationSettings = DEFAULT_REGISTRATION
+    alpha2: tuple = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)
+    fanning_steps: int = 10
+    deformation: str = "lddmm"
+    distance: str = "rms"
+
+    def __post_init__(self):
+        if not isinstance(self.registration, RegistrationSettings):
+            raise TypeError(
+                "StudyConfig: registration: expected RegistrationSettings, got "
+                f"{type(self.registration).__name__}"
+            )
+        object.__setattr__(self, "alpha2", tuple(float(a) for a in self.alpha2))
+
+    @classmethod
+    def build(cls, **fields) -> StudyConfig:
+        """A configuration from study fields and registration settings given together.
+
+        ``StudyConfig.build(alpha2=(1.0,), sigma=20.0, max_iter=15)`` sets ``alpha2``
+        and overrides ``sigma`` and ``max_iter`` of :data:`DEFAULT_REGISTRATION`
+        (or of ``registration=`` when given).
+        """
+        own = {f.name for f in dataclasses.fields(cls)}
+        study = {k: v for k, v in fields.items() if k in own}
+        changes = {k: v for k, v in fields.items() if k not in own}
+        base = study.pop("registration", DEFAULT_REGISTRATION)
+        return cls(registration=base.replace(**changes), **study)
+
+    def as_dict(self) -> dict:
+        """JSON-ready fields; the registration settings as their own dict and key."""
+        return {
+            "registration": self.registration.as_dict(),
+            "registration_key": self.registration.key(),
+            "alpha2": [float(a) for a in self.alpha2],
+            "fanning_steps": self.fanning_steps,
+            "deformation": self.deformation,
+            "distance": self.distance,
+        }
+
+
+def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
+    """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``."""
+    spaces = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
+    if config.deformation not in spaces:
+        raise ValueError(
+            f"StudyConfig.deformation: expected 'lddmm' or 'svf', got {config.deformation!r}"
+        )
+    k, d = template.shape
+    return spaces[config.deformation](
+        n_landmarks=k,
+        dim=d,
+        alpha=float(np.sqrt(alpha2)),
+        settings=config.registration,
+    )
+
+
+def _check_alpha2(alpha2) -> float:
+    value = float(alpha2) if isinstance(alpha2, (int, float)) else float("nan")
+    if isinstance(alpha2, bool) or not np.isfinite(value) or value <= 0:
+        raise ValueError(f"alpha2: expected a finite number > 0, got {alpha2!r}")
+    return value
+
+
+@contextlib.contextmanager
+def _counted_convergence_warnings():
+    """Silence :class:`ConvergenceWarning` (the spaces count stopped registrations)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConvergenceWarning)
+        yield
+    for w in caught:
+        if not issubclass(w.category, ConvergenceWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def _registration(space, dist, t, s) -> RegistrationSummary:
+    reg = space.register(t, s)
+    return RegistrationSummary(
+        error=float(dist(reg.deformed, s)),
+        rms=float(reg.rms_error),
+        rkhs_norm=float(reg.rkhs_norm),
+        converged=bool(reg.converged),
+        inverse_consistency=float(space.inverse_consistency(t, s, distance=dist)),
+    )
+
+
+def _other_transport(config, space, t, s, s2) -> tuple[str, np.ndarray]:
+    """The fanning scheme (LDDMM) or the SVF pole ladder by conjugation (SVF): ``T'``."""
+    if config.deformation == "svf":  # exp(-v/2) o exp(u) o exp(v/2) applied to T
+        return SVF_CONJUGATION, group_pole_ladder(
+            space, t, space.log(t, s), space.log(s, s2), base=s
+        )
+    # Transport Log_S(S') along the geodesic S -> T, then shoot the atlas with it.
+    fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
+    return FANNING, space.shoot(t, fan.momenta, control_points=fan.control_points)
+
+
+def _transports(config, space, dist, atlas, faces, subject, las_subject):
+    """Symmetry errors of both variants and the three transports, with their shapes."""
+    t, s, s2 = atlas, subject.ed, subject.es
+    errors, transports, shapes = [], [], []
+    for variant in VARIANTS:
+        sp = ResidualAugmented(space, use_residuals=variant == "residual")
+        errs = symmetry_errors(sp, t, s, s2, distance=dist)
+        errors.append(VariantErrors(variant, *(float(getattr(errs, n)) for n in ERROR_NAMES)))
+        points = errs.points  # T' = s_T(s_M(S')), Algorithm 1
+        shapes.append(
+            TransportShapes(
+                POLE_LADDER[variant],
+                points["pole_ladder"],
+                points["midpoint"],
+                points["reflected"],
+            )
+        )
+    method, t_other = _other_transport(config, space, t, s, s2)
+    shapes.append(TransportShapes(method, t_other))
+    for shape in shapes:
+        las = area_strain(t, shape.transported, faces)
+        ase = area_strain_error(las_subject, las)
+        transports.append(TransportResult(shape.method, ase, las))
+    return errors, transports, shapes
+
+
+def compute_pair(
+    config: StudyConfig,
+    atlas,
+    faces,
+    subject: Subject,
+    alpha2: float,
+    meshes=None,
+    mesh_format: str = ".vtu",
+) -> PairResult:
+    """The results of one subject at one ``alpha^2``: the one computation of a study pair.
+
+    Everything else (a whole subject, a cohort, in parallel, resumed) calls it.
+
+    Parameters
+    ----------
+    config : StudyConfig
+        The registration settings (``config.registration``) and the study's own.
+    atlas : array, shape (k, 3)
+        The atlas ``T``.
+    faces : int array, shape (f, 3)
+    subject : Subject
+        A ``name`` and ``ed``, ``es`` vertex arrays ``(k, 3)`` in correspondence
+        with ``atlas``.
+    alpha2 : float
+        The regularisation ``alpha^2`` of eq. 3 (> 0).
+    meshes : path, optional
+        A folder: the pair's shapes and strain maps are written there
+        (:func:`ladders.study.meshes.write_subject_meshes`).
+    mesh_format : {".vtu", ".vtk"}
+        Format of those files.
+
+    Returns
+    -------
+    PairResult
+
+    Notes
+    -----
+    Registrations stopped by the iteration limit are counted by the space
+    (``result.counts.non_converged``) rather than warned once per call.
+    """
+    start = time.perf_counter()
+    alpha2 = _check_alpha2(alpha2)
+    if meshes is not None and mesh_format not in MESH_OUTPUT_FORMATS:
+        raise ValueError(f"mesh_format: expected one of {MESH_OUTPUT_FORMATS}, got {mesh_format!r}")
+    las_subject = area_strain(subject.ed, subject.es, faces)
+    with _counted_convergence_warnings():
+        space = make_space(config, atlas, alpha2)
+        dist = point_distance(config.distance, space.point_shape)
+        registration = _registration(space, dist, atlas, subject.ed)
+        errors, transports, shapes = _transports(
+            config, space, dist, atlas, faces, subject, las_subject
+        )
+    result = PairResult(
+        subject=subject.name,
+        alpha2=alpha2,
+        settings_key=config.registration.key(),
+        deformation=config.deformation,
+        unit=UNITS[config.distance],
+        registration=registration,
+        errors=tuple(errors),
+        transports=tuple(transports),
+        las_subject=las_subject,
+        counts=RegistrationCounts.of_space(space),
+        seconds=0.0,
+        kernel_backend=config.registration.resolved_backend(),
+    )
+    if meshes is not None:
+        write_subject_meshes(meshes, subject, atlas, faces, result, shapes, ext=mesh_format)
+    return dataclasses.replace(result, seconds=time.perf_counter() - start)
+
+
+def run_subject(config: StudyConfig, atlas, faces, subject: Subject) -> SubjectResults:
+    """The results of one subject over the sweep ``config.alpha2`` (:func:`compute_pair` each).
+
+    An exception of one pair propagates; :func:`ladders.study.running.runner.run_study`
+    records it and goes on instead.
+    """
+    pairs = [compute_pair(config, atlas, faces, subject, a) for a in config.alpha2]
+    return SubjectResults(subject.name, tuple(pairs))

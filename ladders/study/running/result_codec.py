@@ -1,0 +1,96 @@
+"""JSON form of the typed results, for :mod:`ladders.study.running.store` only.
+
+:func:`encode` turns a :class:`~ladders.study.running.results.PairResult` or
+:class:`~ladders.study.running.results.FailedPair` into a JSON-ready dict with
+``schema_version`` and ``status``; :func:`decode` reads it back and refuses
+anything it cannot read whole (:class:`ResultSchemaError`, naming the field): a
+file of another schema version, a missing or extra field, a value of the wrong
+type or a non-finite number.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import typing
+
+from .results import SCHEMA_VERSION, FailedPair, PairResult
+
+__all__ = ["ResultSchemaError", "encode", "decode", "schema_version"]
+
+
+class ResultSchemaError(ValueError):
+    """A stored result that cannot be read whole; the message says what is wrong."""
+
+
+def encode(result: PairResult | FailedPair) -> dict:
+    """The JSON-ready dict of ``result``, with ``schema_version`` and ``status`` first."""
+    body = dataclasses.asdict(result)
+    return {"schema_version": SCHEMA_VERSION, "status": result.status, **body}
+
+
+def schema_version(data) -> int | None:
+    """The schema version of stored data (1 for files written before versions existed)."""
+    if not isinstance(data, dict):
+        return None
+    version = data.get("schema_version", 1)
+    return version if isinstance(version, int) and not isinstance(version, bool) else None
+
+
+def decode(data) -> PairResult | FailedPair:
+    """The typed result stored as ``data`` (a parsed JSON object).
+
+    Raises
+    ------
+    ResultSchemaError
+        ``data`` is of another schema version or does not hold the whole result.
+    """
+    version = schema_version(data)
+    if version != SCHEMA_VERSION:
+        raise ResultSchemaError(
+            f"written with result schema {version}, this version reads schema {SCHEMA_VERSION}"
+        )
+    status = data.get("status")
+    classes = {"ok": PairResult, "failed": FailedPair}
+    if status not in classes:
+        raise ResultSchemaError(f"status: expected 'ok' or 'failed', got {status!r}")
+    body = {k: v for k, v in data.items() if k not in ("schema_version", "status", "params_hash")}
+    return _build(classes[status], body, "")
+
+
+def _build(cls, node, path: str):
+    """An instance of the dataclass ``cls`` from the dict ``node`` (every field, no other)."""
+    if not isinstance(node, dict):
+        raise ResultSchemaError(f"{path or 'result'}: expected an object, got {node!r:.40}")
+    hints = typing.get_type_hints(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    missing = [n for n in names if n not in node]
+    extra = sorted(set(node) - set(names))
+    if missing or extra:
+        what = f"missing {missing}" if missing else f"unexpected {extra}"
+        raise ResultSchemaError(f"{path or 'result'}: {what}")
+    return cls(**{n: _value(hints[n], node[n], f"{path}.{n}" if path else n) for n in names})
+
+
+def _value(hint, value, path: str):
+    """``value`` checked against the type ``hint`` of a field."""
+    if dataclasses.is_dataclass(hint):
+        return _build(hint, value, path)
+    origin = typing.get_origin(hint)
+    if origin is tuple:
+        item = typing.get_args(hint)[0]
+        if not isinstance(value, list):
+            raise ResultSchemaError(f"{path}: expected a list, got {type(value).__name__}")
+        return tuple(_value(item, v, f"{path}[{i}]") for i, v in enumerate(value))
+    checks = {
+        float: lambda v: (
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        ),
+        int: lambda v: isinstance(v, int) and not isinstance(v, bool),
+        bool: lambda v: isinstance(v, bool),
+        str: lambda v: isinstance(v, str),
+    }
+    if hint not in checks or not checks[hint](value):
+        name = getattr(hint, "__name__", str(hint))
+        raise ResultSchemaError(f"{path}: expected a finite {name}, got {value!r:.40}")
+    return float(value) if hint is float else value

@@ -1,0 +1,349 @@
+"""The typed results of the study: one :class:`PairResult` per (subject, ``alpha^2``).
+
+A pair's result holds the registration ``T -> S`` (:class:`RegistrationSummary`),
+the four symmetry errors of each variant (:class:`VariantErrors`), one
+:class:`TransportResult` per transport method (its area strain error and map),
+the subject's own strain map and the registration counters of the space
+(:class:`RegistrationCounts`). A pair that raised is a :class:`FailedPair`; a
+subject's pairs over the sweep are a :class:`SubjectResults`.
+
+Every class is a frozen dataclass of numbers, strings and tuples, so results
+compare with ``==`` and hash. Only :mod:`ladders.study.running.store` writes them
+to JSON and reads them back, with the :data:`SCHEMA_VERSION` of this module.
+
+Transport methods are named for what they are:
+
+=============================  ==================================================
+``pole_ladder_residual``       pole ladder (Algorithm 1) with residuals
+``pole_ladder_no_residual``    pole ladder without residuals
+``fanning``                    the fanning scheme (LDDMM study)
+``svf_conjugation``            the SVF pole ladder by conjugation (SVF study)
+=============================  ==================================================
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "VARIANTS",
+    "ERROR_NAMES",
+    "REGISTRATION_MEASURES",
+    "POLE_LADDER",
+    "FANNING",
+    "SVF_CONJUGATION",
+    "TRANSPORT_LABELS",
+    "VariantErrors",
+    "RegistrationSummary",
+    "RegistrationCounts",
+    "TransportResult",
+    "PairResult",
+    "FailedPair",
+    "SubjectResults",
+]
+
+#: Version of the layout of a stored pair result; a file of another version is recomputed.
+SCHEMA_VERSION = 2
+
+VARIANTS = ("residual", "no_residual")
+ERROR_NAMES = ("midpoint_distance", "centrality", "involutivity", "transvectivity")
+#: Measures of the registration ``T -> S``, shared by both variants.
+REGISTRATION_MEASURES = ("registration_error", "registration_norm", "inverse_consistency")
+
+#: The pole ladder's transport method of each variant.
+POLE_LADDER = {variant: f"pole_ladder_{variant}" for variant in VARIANTS}
+FANNING = "fanning"
+SVF_CONJUGATION = "svf_conjugation"
+#: What each transport method is, for tables and figure legends.
+TRANSPORT_LABELS = {
+    POLE_LADDER["residual"]: "pole ladder, with residuals",
+    POLE_LADDER["no_residual"]: "pole ladder, without residuals",
+    FANNING: "fanning scheme",
+    SVF_CONJUGATION: "SVF pole ladder by conjugation",
+}
+
+
+def _floats(values) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(values, dtype=float).ravel())
+
+
+def _bad_numbers(prefix: str, obj) -> list[str]:
+    """Dotted names of the float fields of a dataclass that are NaN or infinite."""
+    out = []
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if isinstance(value, float) and not math.isfinite(value):
+            out.append(f"{prefix}{f.name}")
+        elif isinstance(value, tuple) and value and isinstance(value[0], float):
+            if not all(math.isfinite(v) for v in value):
+                out.append(f"{prefix}{f.name}")
+    return out
+
+
+@dataclass(frozen=True)
+class VariantErrors:
+    """The four symmetry errors of one variant (``"residual"`` or ``"no_residual"``)."""
+
+    variant: str
+    midpoint_distance: float
+    centrality: float
+    involutivity: float
+    transvectivity: float
+
+
+@dataclass(frozen=True)
+class RegistrationSummary:
+    """The registration ``T -> S`` shared by both variants.
+
+    Attributes
+    ----------
+    error : float
+        ``d(phi_1(T), S)`` in the study's distance (the pair's ``unit``).
+    rms : float
+        The same as a per-vertex RMS distance.
+    rkhs_norm : float
+        ``||v_0||_H`` of the registration.
+    converged : bool
+        Whether it met the stopping rule.
+    inverse_consistency : float
+        See :meth:`manifolds.lddmm.KernelLandmarkSpace.inverse_consistency`.
+    """
+
+    error: float
+    rms: float
+    rkhs_norm: float
+    converged: bool
+    inverse_consistency: float
+
+    def measure(self, name: str) -> float:
+        """One of :data:`REGISTRATION_MEASURES` (or ``"converged"`` as 1.0 / 0.0)."""
+        values = {
+            "registration_error": self.error,
+            "registration_norm": self.rkhs_norm,
+            "inverse_consistency": self.inverse_consistency,
+            "converged": float(self.converged),
+        }
+        return values[name]
+
+
+@dataclass(frozen=True)
+class RegistrationCounts:
+    """Counters of the registrations a space computed (cache hits excluded).
+
+    Attributes
+    ----------
+    n_registrations, non_converged, n_iterations, n_flow_evaluations : int
+        Registrations, those that stopped before meeting the stopping rule,
+        optimiser iterations and flow passes (forward, adjoint, tangent-linear).
+    max_gradient_norm : float
+        Largest final gradient among them.
+    """
+
+    n_registrations: int = 0
+    non_converged: int = 0
+    n_iterations: int = 0
+    n_flow_evaluations: int = 0
+    max_gradient_norm: float = 0.0
+
+    @classmethod
+    def of_space(cls, space) -> RegistrationCounts:
+        """The counters of a :class:`~manifolds.lddmm.KernelLandmarkSpace`."""
+        return cls(
+            n_registrations=int(space.n_registrations),
+            non_converged=int(space.n_unconverged),
+            n_iterations=int(space.n_iterations),
+            n_flow_evaluations=int(space.n_flow_evaluations),
+            max_gradient_norm=float(space.max_gradient_norm),
+        )
+
+    @classmethod
+    def total(cls, counts: Iterable[RegistrationCounts]) -> RegistrationCounts:
+        """Sums of the counters (the largest gradient for ``max_gradient_norm``)."""
+        counts = list(counts)
+        return cls(
+            n_registrations=sum(c.n_registrations for c in counts),
+            non_converged=sum(c.non_converged for c in counts),
+            n_iterations=sum(c.n_iterations for c in counts),
+            n_flow_evaluations=sum(c.n_flow_evaluations for c in counts),
+            max_gradient_norm=max((c.max_gradient_norm for c in counts), default=0.0),
+        )
+
+
+@dataclass(frozen=True)
+class TransportResult:
+    """One transport of the subject's motion to the atlas, ``T -> T'``.
+
+    Attributes
+    ----------
+    method : str
+        See the module docstring.
+    ase : float
+        Area strain error ``||LAS_T' - LAS_S||_2``.
+    las : tuple of float
+        Local area strain from ``T`` to ``T'`` at every vertex.
+    """
+
+    method: str
+    ase: float
+    las: tuple[float, ...]
+
+    def __post_init__(self):
+        object.__setattr__(self, "las", _floats(self.las))
+
+    @property
+    def label(self) -> str:
+        """What the method is, e.g. ``"pole ladder, with residuals"``."""
+        return TRANSPORT_LABELS.get(self.method, self.method)
+
+
+@dataclass(frozen=True)
+class _Pair:
+    """What names a pair: its subject and ``alpha^2``."""
+
+    subject: str
+    alpha2: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "alpha2", float(self.alpha2))
+
+
+@dataclass(frozen=True)
+class PairResult(_Pair):
+    """The result of one subject at one ``alpha^2`` (computed by
+    :func:`ladders.study.running.pipeline.compute_pair`).
+
+    Attributes
+    ----------
+    subject : str
+    alpha2 : float
+    settings_key : str
+        :meth:`manifolds.lddmm.RegistrationSettings.key` of the registrations.
+    deformation : str
+        ``"lddmm"`` or ``"svf"``.
+    unit : str
+        Unit of the distances, e.g. ``"mm (per-vertex RMS)"``.
+    registration : RegistrationSummary
+    errors : tuple of VariantErrors
+        One per variant, in the order of :data:`VARIANTS`.
+    transports : tuple of TransportResult
+        The two pole ladders, then the fanning scheme (LDDMM) or the SVF
+        conjugation (SVF).
+    las_subject : tuple of float
+        Local area strain from ``S`` to ``S'``.
+    counts : RegistrationCounts
+    seconds : float
+    kernel_backend : str
+        The kernel backend that ran.
+    """
+
+    settings_key: str
+    deformation: str
+    unit: str
+    registration: RegistrationSummary
+    errors: tuple[VariantErrors, ...]
+    transports: tuple[TransportResult, ...]
+    las_subject: tuple[float, ...]
+    counts: RegistrationCounts
+    seconds: float
+    kernel_backend: str
+
+    status = "ok"
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "errors", tuple(self.errors))
+        object.__setattr__(self, "transports", tuple(self.transports))
+        object.__setattr__(self, "las_subject", _floats(self.las_subject))
+
+    def variant(self, name: str) -> VariantErrors:
+        """The errors of the variant ``name`` (``"residual"`` or ``"no_residual"``)."""
+        for errors in self.errors:
+            if errors.variant == name:
+                return errors
+        raise KeyError(f"variant: expected one of {VARIANTS}, got {name!r}")
+
+    def transport(self, method: str) -> TransportResult:
+        """The transport ``method`` (e.g. ``"pole_ladder_residual"``, ``"fanning"``)."""
+        for transport in self.transports:
+            if transport.method == method:
+                return transport
+        known = [t.method for t in self.transports]
+        raise KeyError(f"method: expected one of {known}, got {method!r}")
+
+    @property
+    def other_transport(self) -> TransportResult:
+        """The transport that is not a pole ladder: fanning or SVF conjugation."""
+        return next(t for t in self.transports if t.method not in POLE_LADDER.values())
+
+    def measure(self, row: str, name: str) -> float:
+        """A number of the result by its row and measure in the tables.
+
+        ``row`` is a variant or a transport method; ``name`` one of
+        :data:`ERROR_NAMES` (variants), ``"ase"`` (a variant's pole ladder, or the
+        method's), :data:`REGISTRATION_MEASURES` or ``"converged"`` (any row).
+        """
+        if name in (*REGISTRATION_MEASURES, "converged"):
+            return self.registration.measure(name)
+        if name == "ase":
+            return self.transport(POLE_LADDER.get(row, row)).ase
+        if name not in ERROR_NAMES:
+            raise KeyError(f"name: unknown measure {name!r}")
+        return float(getattr(self.variant(row), name))
+
+    def non_finite_fields(self) -> list[str]:
+        """Dotted names of the numbers that are NaN or infinite (empty for a sound result)."""
+        bad = _bad_numbers("registration.", self.registration)
+        for errors in self.errors:
+            bad += _bad_numbers(f"{errors.variant}.", errors)
+        for transport in self.transports:
+            bad += _bad_numbers(f"{transport.method}.", transport)
+        bad += _bad_numbers("", self)
+        return bad
+
+
+@dataclass(frozen=True)
+class FailedPair(_Pair):
+    """A (subject, ``alpha^2``) whose computation raised: its error and traceback."""
+
+    error: str
+    traceback: str
+    seconds: float
+
+    status = "failed"
+
+
+@dataclass(frozen=True)
+class SubjectResults:
+    """One subject's pairs over the sweep: the results and the failures."""
+
+    subject: str
+    pairs: tuple[PairResult, ...] = ()
+    failures: tuple[FailedPair, ...] = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "pairs", tuple(sorted(self.pairs, key=lambda p: p.alpha2)))
+        object.__setattr__(self, "failures", tuple(self.failures))
+
+    @property
+    def alpha2(self) -> tuple[float, ...]:
+        """The ``alpha^2`` with a result, increasing."""
+        return tuple(p.alpha2 for p in self.pairs)
+
+    def at(self, alpha2: float) -> PairResult | None:
+        """The result at ``alpha2``, or None (failed or not in the sweep)."""
+        return next((p for p in self.pairs if p.alpha2 == float(alpha2)), None)
+
+    @property
+    def non_converged_registrations(self) -> int:
+        """Registrations of the successful pairs that stopped before the stopping rule."""
+        return sum(p.counts.non_converged for p in self.pairs)
+
+    @property
+    def seconds(self) -> float:
+        """Compute time of the successful pairs."""
+        return float(sum(p.seconds for p in self.pairs))
