@@ -100,7 +100,7 @@ class LDDMMLandmarks(KernelLandmarkSpace):
         -------
         control_points, momenta : arrays, shape ``(n_cp, d)``
         """
-        rhs, _ = hamiltonian_system(self.kernel)
+        rhs, _, _ = hamiltonian_system(self.kernel)
         state = (np.asarray(control_points, dtype=float), np.asarray(momenta, dtype=float))
         (c, mu), _ = self.integrator.step(rhs, state, float(h))
         return c, mu

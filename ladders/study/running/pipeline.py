@@ -103,6 +103,10 @@ class StudyConfig:
     distance : str
         Unit of the errors, the registration error and the inverse consistency:
         ``"rms"`` (per-vertex RMS distance, the paper's mm), ``"frobenius"`` or ``"mean"``.
+    warm_starts : bool
+        Start ``Log_M(s_M(S'))`` (involutivity) from its symmetric counterpart
+        ``-Log_M(S')`` (:func:`ladders.symmetry_errors`, ``warm_start``) instead of
+        the linearised start.
     """
 
     registration: RegistrationSettings = DEFAULT_REGISTRATION
@@ -110,6 +114,7 @@ class StudyConfig:
     fanning_steps: int = 10
     deformation: str = "lddmm"
     distance: str = "rms"
+    warm_starts: bool = False
 
     def __post_init__(self):
         if not isinstance(self.registration, RegistrationSettings):
@@ -142,6 +147,7 @@ class StudyConfig:
             "fanning_steps": self.fanning_steps,
             "deformation": self.deformation,
             "distance": self.distance,
+            "warm_starts": self.warm_starts,
         }
 
 
@@ -207,7 +213,7 @@ def _transports(config, space, dist, atlas, faces, subject, las_subject):
     errors, transports, shapes = [], [], []
     for variant in VARIANTS:
         sp = ResidualAugmented(space, use_residuals=variant == "residual")
-        errs = symmetry_errors(sp, t, s, s2, distance=dist)
+        errs = symmetry_errors(sp, t, s, s2, distance=dist, warm_start=config.warm_starts)
         errors.append(VariantErrors(variant, *(float(getattr(errs, n)) for n in ERROR_NAMES)))
         points = errs.points  # T' = s_T(s_M(S')), Algorithm 1
         shapes.append(
