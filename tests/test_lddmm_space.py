@@ -162,7 +162,7 @@ def test_study_preflight_budget_covers_the_finer_grid():
 def test_dense_means_control_points_at_the_template_vertices_everywhere():
     """shoot tells dense control points as the registration does (equal values, not
     only the same array): a copy of the template is carried as the control points."""
-    from manifolds.lddmm.registration_problem import is_dense
+    from manifolds.lddmm.control_points import is_dense
 
     rng = np.random.default_rng(7)
     space = LDDMMLandmarks(12, 2, sigma=0.8, alpha=0.1, control_points="dense")

@@ -136,8 +136,10 @@ def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
         fake_subject("s1", [pair(1.0, 5e-7), pair(10.0, 0.0)]),
     ]
     text = convergence_markdown(results)
-    assert "Registrations: 39; 36 (92.31%) met the optimiser's tolerance" in text
-    assert "3 stopped at the iteration limit; 20 iterations on average" in text
+    assert "Registrations: 39; 36 (92.31%) converged, 3 stopped before" in text
+    assert "20 iterations on average" in text
+    ruled = convergence_markdown(results, "the shape moved by at most 1e-4")
+    assert "converged (converged: the shape moved by at most 1e-4)" in ruled
     assert "(40 flow passes)" in text
     assert "largest final gradient 5e-07" in text
 

@@ -5,7 +5,7 @@ momenta:
 
 * ``"dense"``: the template's own vertices (``n_cp = k``). This is the one meaning of
   "dense" in the package: control points that are the template's vertices, which
-  :func:`manifolds.lddmm.registration_problem.is_dense` tells (the registration and
+  :func:`is_dense` tells (the registration and
   :meth:`~manifolds.lddmm.LDDMMLandmarks.shoot` then carry the template as the
   control points themselves);
 * ``"grid"``: a regular grid of spacing ``sigma`` centred on the template's
@@ -32,6 +32,7 @@ from ..errors import ManifoldError
 from ..validation import check_array
 
 __all__ = [
+    "is_dense",
     "grid_control_points",
     "grid_size",
     "check_grid_budget",
@@ -44,6 +45,13 @@ __all__ = [
 POLICIES = ("dense", "grid", "finegrid", "auto")
 AUTO_THRESHOLD = 1000
 MAX_CONTROL_POINTS = 20_000
+
+
+def is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
+    """Whether the control points are the template's vertices themselves (the ``"dense"`` policy)."""
+    return control_points is template or (
+        control_points.shape == template.shape and np.array_equal(control_points, template)
+    )
 
 
 def grid_size(points: np.ndarray, spacing: float) -> tuple[np.ndarray, float]:

@@ -4,7 +4,7 @@ The optimiser works on ``z = R^T mu`` rather than on the momenta ``mu`` themselv
 With ``R R^T = K_xc^T K_xc + alpha^2 K_cc + eps I``, the Gauss-Newton Hessian of
 the linearised registration problem (``phi_1(T) ~ T + K_xc mu``), the objective
 is close to isotropic in ``z``, and the minimiser of the linearised problem is
-the optimiser's start. Above :data:`PRECONDITION_MAX_CP` control points the dense
+the optimiser's start. Above :data:`PRECONDITION_MAX_CP` control points the full
 factor is replaced by a diagonal scaling (:class:`DiagonalPreconditioner`), which
 has no cheap linearised minimiser: the optimiser then starts from zero momenta.
 Without preconditioning ``z = mu`` and the start is zero momenta as well.
@@ -26,7 +26,7 @@ __all__ = [
     "PRECONDITION_MAX_CP",
 ]
 
-PRECONDITION_MAX_CP = 4000  # largest n_cp for the dense Cholesky preconditioner
+PRECONDITION_MAX_CP = 4000  # largest n_cp for the full Cholesky preconditioner
 
 
 class Preconditioner:
@@ -81,7 +81,8 @@ class CholeskyPreconditioner(Preconditioner):
     control_points : array, shape ``(n_cp, d)``
     alpha : float
     dense : bool
-        Whether the control points are the template's vertices (``K_xc = K_cc``).
+        Whether the control points are the template's vertices (``K_xc = K_cc``,
+        :func:`manifolds.lddmm.control_points.is_dense`).
     rel_ridge : float
         ``eps`` relative to the mean of the diagonal.
     """

@@ -31,11 +31,11 @@ from manifolds.data_terms import DataTerm, SquaredDistance
 from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
 from ..numerics.solvers import StoppingRule, get_solver
-from .control_points import resolve_control_points
+from .control_points import is_dense, resolve_control_points
 from .flow_models import FlowModel, HamiltonianFlow
 from .kernels import GaussianKernel
 from .preconditioner import IdentityPreconditioner, make_preconditioner
-from .registration_problem import RegistrationProblem, is_dense
+from .registration_problem import RegistrationProblem
 from .settings import RegistrationSettings
 
 __all__ = [

@@ -23,14 +23,7 @@ import numpy as np
 from .flow_models import FlowPass, rkhs_norm_sq_gradient, rkhs_norm_sq_hvp
 from .joint_preconditioner import JointPreconditioner
 
-__all__ = ["RegistrationProblem", "Evaluation", "is_dense"]
-
-
-def is_dense(template: np.ndarray, control_points: np.ndarray) -> bool:
-    """Whether the control points are the template's vertices themselves."""
-    return control_points is template or (
-        control_points.shape == template.shape and np.array_equal(control_points, template)
-    )
+__all__ = ["RegistrationProblem", "Evaluation"]
 
 
 @dataclass

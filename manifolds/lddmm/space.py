@@ -15,10 +15,10 @@ import numpy as np
 
 from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
+from .control_points import is_dense
 from .hamiltonian_shooting import hamiltonian_system, shoot
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register
-from .registration_problem import is_dense
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]
@@ -58,7 +58,7 @@ class LDDMMLandmarks(KernelLandmarkSpace):
             Defaults to the policy's control points of ``template``.
         return_trajectory : bool
             Also return the list of ``n_steps + 1`` states ``(c, mu, x)`` (for
-            dense control points, :func:`~manifolds.lddmm.registration_problem.is_dense`,
+            dense control points, :func:`~manifolds.lddmm.control_points.is_dense`,
             the template is carried as ``c``, and the states are ``(c, mu)``).
         integrator : optional
             Overrides the space's integrator.

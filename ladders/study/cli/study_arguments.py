@@ -19,6 +19,7 @@ from .cli_types import (
 
 __all__ = [
     "add_study_arguments",
+    "REGISTRATION_FLAGS",
     "DEFAULT_ALPHA2",
     "FULL_ALPHA2",
     "DEFAULT_SUBJECTS",
@@ -111,15 +112,39 @@ def _add_input_arguments(p) -> None:
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
 
 
+#: Flags that set a field of the study's registration settings (flag dest -> field).
+REGISTRATION_FLAGS = (
+    "sigma",
+    "control_points",
+    "optimize_control_points",
+    "integrator",
+    "n_steps",
+    "solver",
+    "stopping",
+    "shape_tol",
+    "ftol",
+    "max_iter",
+    "kernel_backend",
+)
+
+
 def _add_model_arguments(p) -> None:
-    """Flags of the deformation model, the registration and the transports."""
+    """Flags of the deformation model, the registration and the transports.
+
+    The registration flags default to the study's :data:`DEFAULT_REGISTRATION`
+    (their help shows its values); a flag left out keeps the default's field.
+    """
+    from manifolds.numerics.solvers import SOLVERS
+
+    from ..running.pipeline import DEFAULT_REGISTRATION as d
+
     p.add_argument(
-        "--sigma", type=positive_float, default=20.0, help="kernel width (mesh units, mm)"
+        "--sigma", type=positive_float, default=d.sigma, help="kernel width (mesh units, mm)"
     )
     p.add_argument(
         "--control-points",
         choices=("grid", "finegrid", "dense"),
-        default="grid",
+        default=d.control_points,
         help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices",
     )
     p.add_argument(
@@ -136,19 +161,49 @@ def _add_model_arguments(p) -> None:
     p.add_argument(
         "--integrator",
         choices=("euler", "rk2", "rk4"),
-        default="euler",
+        default=d.integrator,
         help="time integrator of the flows, used by the registrations, the shooting and the "
         "fanning scheme",
     )
-    p.add_argument("--n-steps", type=positive_int, default=10, help="time steps of the shooting")
     p.add_argument(
-        "--max-iter", type=positive_int, default=2000, help="L-BFGS-B iterations per registration"
+        "--n-steps", type=positive_int, default=d.n_steps, help="time steps of the shooting"
+    )
+    p.add_argument(
+        "--solver",
+        choices=sorted(SOLVERS),
+        default=d.solver,
+        help="optimiser of the registrations (docs/lddmm.md, 'Solvers')",
+    )
+    p.add_argument(
+        "--stopping",
+        choices=("shape", "objective"),
+        default=d.stopping,
+        help="stopping rule: 'shape' stops when the deformed template no longer moves by "
+        "more than --shape-tol (per-vertex RMS, mesh units); 'objective' on the relative "
+        "decrease of the objective (--ftol)",
+    )
+    p.add_argument(
+        "--shape-tol",
+        type=positive_float,
+        default=d.shape_tol,
+        help="tolerance of the 'shape' stopping rule (mesh units, per-vertex RMS)",
     )
     p.add_argument(
         "--ftol",
         type=positive_float,
-        default=1e-11,
-        help="L-BFGS-B tolerance on the relative decrease of the objective",
+        default=d.ftol,
+        help="tolerance of the 'objective' stopping rule (relative decrease of the objective)",
+    )
+    p.add_argument(
+        "--max-iter",
+        type=positive_int,
+        default=d.max_iter,
+        help="iteration limit of each registration",
+    )
+    p.add_argument(
+        "--warm-starts",
+        action="store_true",
+        help="start Log_M(s_M(S')) from -Log_M(S') (docs/study.md, 'Warm starts')",
     )
     p.add_argument(
         "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
@@ -163,7 +218,7 @@ def _add_model_arguments(p) -> None:
     p.add_argument(
         "--kernel-backend",
         choices=("auto", "numpy", "numba"),
-        default="auto",
+        default=d.kernel_backend,
         help="kernel sums: 'auto' uses numba when it imports, else numpy (the reference)",
     )
 

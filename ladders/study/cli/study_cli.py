@@ -15,6 +15,7 @@ from .study_arguments import (
     DEFAULT_SUBJECTS,
     FULL_ALPHA2,
     FULL_SUBJECTS,
+    REGISTRATION_FLAGS,
     add_study_arguments,
 )
 
@@ -147,17 +148,11 @@ def _config(args, deformation: str):
     alpha2 = args.alpha2 or (FULL_ALPHA2 if args.full else DEFAULT_ALPHA2)
     return StudyConfig.build(
         alpha2=tuple(alpha2),
-        sigma=args.sigma,
-        control_points=args.control_points,
-        integrator=args.integrator,
-        n_steps=args.n_steps,
-        max_iter=args.max_iter,
-        ftol=args.ftol,
         fanning_steps=args.fanning_steps,
-        kernel_backend=args.kernel_backend,
         deformation=deformation,
         distance=args.distance,
-        optimize_control_points=args.optimize_control_points,
+        warm_starts=args.warm_starts,
+        **{name: getattr(args, name) for name in REGISTRATION_FLAGS},
     )
 
 
@@ -190,7 +185,12 @@ def _run_one(args, cohort, description, config, output: Path):
         if not args.no_meshes:
             _note_pairs_without_meshes(outcome)
     shapes = {s.name: s.ed for s in cohort.subjects}
-    paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, shapes)
+    from manifolds.numerics.solvers import StoppingRule
+
+    rule = StoppingRule.from_settings(config.registration)
+    paths = write_report(
+        outcome.results, output, cohort.atlas, cohort.faces, shapes, stopping=rule.describe()
+    )
     pairs = [p for r in outcome.results for p in r.pairs]
     if pairs:
         print()
@@ -198,8 +198,8 @@ def _run_one(args, cohort, description, config, output: Path):
     counts = RegistrationCounts.total(p.counts for p in pairs)
     print(
         f"Registrations: {counts.n_registrations}; {counts.non_converged} stopped at the "
-        f"iteration limit (--max-iter {config.registration.max_iter}) before meeting the "
-        "optimiser's tolerance."
+        f"iteration limit (--max-iter {config.registration.max_iter}) before converging "
+        f"({rule!r})."
     )
     if "maps_subject" in paths:
         print(f"Fig. 5b shows subject {paths.pop('maps_subject')} (median ASE).")

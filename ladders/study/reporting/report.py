@@ -80,16 +80,18 @@ def _cell(get: dict, key: tuple) -> str:
     return f"{get[key]:.3g}" if key in get else "n/a"
 
 
-def convergence_markdown(results: list) -> str:
-    """One paragraph: registrations, the fraction that met the optimiser's tolerance,
-    mean iterations and the largest final gradient (in the optimiser's variables)."""
+def convergence_markdown(results: list, stopping: str | None = None) -> str:
+    """One paragraph: registrations, the fraction that converged (met the stopping rule,
+    stated when ``stopping`` describes it), mean iterations and flow passes, and the
+    largest final gradient (in the optimiser's variables)."""
     c = RegistrationCounts.total(p.counts for r in results for p in r.pairs)
     n, bad = c.n_registrations, c.non_converged
     if n == 0:
         return "No registration.\n"
+    rule = f" (converged: {stopping})" if stopping else ""
     return (
-        f"Registrations: {n}; {n - bad} ({(n - bad) / n:.2%}) met the optimiser's tolerance, "
-        f"{bad} stopped at the iteration limit; {c.n_iterations / n:.0f} iterations on average "
+        f"Registrations: {n}; {n - bad} ({(n - bad) / n:.2%}) converged{rule}, "
+        f"{bad} stopped before; {c.n_iterations / n:.0f} iterations on average "
         f"({c.n_flow_evaluations / n:.0f} flow passes); largest final gradient "
         f"{c.max_gradient_norm:.3g} (optimiser's normalised variables).\n"
     )
@@ -194,7 +196,13 @@ def failures_markdown(results: list) -> str:
 
 
 def write_report(
-    results: list, output, atlas, faces, subjects_ed=None, unit: str | None = None
+    results: list,
+    output,
+    atlas,
+    faces,
+    subjects_ed=None,
+    unit: str | None = None,
+    stopping: str | None = None,
 ) -> dict:
     """Write the tables and figures of the study; return their paths.
 
@@ -215,6 +223,10 @@ def write_report(
         of the representative subject (Fig. 5b; not drawn without them).
     unit : str, optional
         Unit of the distances; default: the results' ``unit``.
+    stopping : str, optional
+        The registrations' stopping rule in words
+        (:meth:`manifolds.numerics.solvers.StoppingRule.describe`), stated in
+        ``summary.md`` as what "converged" means.
 
     Returns
     -------
@@ -232,7 +244,7 @@ def write_report(
         return {"summary_md": paths["summary_md"]}
     unit = unit or ok[0].pairs[0].unit
     rows, paired = summarize(results), paired_statistics(results, seed=0)
-    text = summary_markdown(rows, unit) + "\n" + convergence_markdown(results) + "\n"
+    text = summary_markdown(rows, unit) + "\n" + convergence_markdown(results, stopping) + "\n"
     text += paired_markdown(paired, unit)
     if failures_markdown(results):
         text += "\n" + failures_markdown(results)

@@ -73,7 +73,9 @@ UNITS = {
 #: Registration settings of the default study (``docs/study.md``, "Settings chosen by
 #: measurement"): 45 grid control points at ``sigma = 20`` mm, Euler, to the optimiser's
 #: tolerance.
-DEFAULT_REGISTRATION = RegistrationSettings(sigma=20.0, control_points="grid", max_iter=2000)
+DEFAULT_REGISTRATION = RegistrationSettings(
+    sigma=20.0, control_points="grid", integrator="euler", max_iter=2000
+)
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,7 @@ class StudyConfig:
         Every setting of the registrations: kernel width (in the meshes' units, mm
         for the built-in cohort), control points (``"grid"``: spacing ``sigma`` over
         the template's bounding box, ``"finegrid"``: spacing ``sigma / 2``,
-        ``"dense"``: the mesh vertices, :func:`manifolds.lddmm.registration_problem.is_dense`),
+        ``"dense"``: the mesh vertices, :func:`manifolds.lddmm.control_points.is_dense`),
         their optimisation (eq. 3), integrator and
         steps, solver, stopping rule, tolerances, iteration limit, kernel backend.
     alpha2 : tuple of float
