@@ -15,7 +15,8 @@ linearised deformation at the current iterate: with
     J_mu = K(T, c) (x) I_d,   (J_c)_{ij} = K(T_i, c_j) (2 / sigma^2) mu_j (T_i - c_j)^T,
     M = [J_mu J_c]^T [J_mu J_c] + alpha^2 (K(c, c) (x) I_d on the momenta block),
 
-plus a ridge on each block (``rel_ridge`` times the block's mean diagonal), and
+plus a ridge on each block (``rel_ridge`` times the block's mean diagonal, and on
+the control points at least the momenta's ridge divided by ``sigma^2``), and
 ``x = L^T w`` for ``w = (mu, c)`` and ``M = L L^T``. The matrix depends on ``mu``
 and ``c``: the solver rebuilds it every ``RegistrationSettings.refresh_every``
 iterations (:meth:`manifolds.lddmm.RegistrationProblem.refresh`).
@@ -44,10 +45,14 @@ def linearised_joint_gram(kernel, template, control_points, momenta, alpha, rel_
     gram = jac.T @ jac
     nd = n * d
     gram[:nd, :nd] += alpha**2 * np.kron(kernel.matrix(c), np.eye(d))
-    for block in (slice(0, nd), slice(nd, 2 * nd)):
-        sub = gram[block, block]
-        eps = rel_ridge * float(np.trace(sub)) / nd
-        sub[np.diag_indices_from(sub)] += eps if eps > 0 else 1.0
+    mu_block, c_block = gram[:nd, :nd], gram[nd:, nd:]
+    eps_mu = rel_ridge * float(np.trace(mu_block)) / nd
+    # With small momenta the control-point block vanishes with them: its ridge is at
+    # least that of the momenta block per sigma^2 (a control point moved by sigma
+    # changes the field as much as a unit change of its momentum).
+    eps_c = max(rel_ridge * float(np.trace(c_block)) / nd, eps_mu * kernel.inv_s2)
+    mu_block[np.diag_indices_from(mu_block)] += eps_mu if eps_mu > 0 else 1.0
+    c_block[np.diag_indices_from(c_block)] += eps_c if eps_c > 0 else 1.0
     return gram
 
 

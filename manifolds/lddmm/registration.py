@@ -90,6 +90,10 @@ class RegistrationResult:
         from the final gradient (the ``"shape"`` rule's second test).
     settings_key : str
         :meth:`RegistrationSettings.key` of the settings used.
+    trace : list of TraceRow
+        Every iteration: flow passes so far, normalised objective, largest gradient
+        entry, change of ``phi_1(T)`` and the predicted change
+        (:class:`manifolds.numerics.solvers.TraceRow`).
     """
 
     momenta: np.ndarray
@@ -109,6 +113,7 @@ class RegistrationResult:
     gradient_norm: float = float("nan")
     predicted_change: float = float("nan")
     settings_key: str = ""
+    trace: list = field(default_factory=list, repr=False)
 
 
 def as_data_term(target) -> DataTerm:

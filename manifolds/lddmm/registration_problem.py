@@ -82,7 +82,8 @@ class RegistrationProblem:
     def start(self, mu0, control_points) -> np.ndarray:
         """Variables of the start ``(mu0, control_points)``; sets the normalisation."""
         self.control_points = np.asarray(control_points, dtype=float)
-        if self.optimise and self.settings.precondition:
+        s = self.settings
+        if self.optimise and s.precondition and s.joint_metric:
             self.joint = self._joint(mu0, self.control_points)
         x0 = self.variables(mu0, self.control_points)
         f0 = self.evaluate(x0).value
@@ -261,4 +262,5 @@ class RegistrationProblem:
             gradient_norm=float(np.max(np.abs(opt.grad))) if np.size(opt.grad) else 0.0,
             predicted_change=self.predicted_change(opt.x, opt.grad),
             settings_key=self.settings.key(),
+            trace=list(opt.trace),
         )

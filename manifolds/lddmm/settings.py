@@ -82,10 +82,12 @@ class RegistrationSettings:
         Function evaluations per line search.
     max_inner : int
         Inner (conjugate-gradient) iterations per step of the Newton-type solvers.
+    joint_metric : bool
+        With optimised control points, whiten ``(c, mu)`` together with the joint
+        linearised Gauss-Newton matrix (:mod:`manifolds.lddmm.joint_preconditioner`);
+        False: the momenta's preconditioner and ``c / control_point_scale``.
     refresh_every : int
-        With optimised control points, rebuild the joint preconditioner
-        (:mod:`manifolds.lddmm.joint_preconditioner`) every this many iterations
-        (0: never).
+        Rebuild the joint preconditioner every this many iterations (0: never).
     precondition : bool
         Optimise preconditioned momenta (:mod:`manifolds.lddmm.preconditioner`).
     rel_ridge : float
@@ -115,6 +117,7 @@ class RegistrationSettings:
     max_corrections: int = 100
     max_line_search: int = 30
     max_inner: int = 50
+    joint_metric: bool = True
     refresh_every: int = 20
     precondition: bool = True
     rel_ridge: float = 1e-2
@@ -128,7 +131,7 @@ class RegistrationSettings:
         put = object.__setattr__
         put(self, "sigma", check_float(self.sigma, f"{name}: sigma", minimum=0.0, strict=True))
         put(self, "control_points", self._check_policy(self.control_points))
-        for flag in ("optimize_control_points", "precondition"):
+        for flag in ("optimize_control_points", "precondition", "joint_metric"):
             value = getattr(self, flag)
             if not isinstance(value, bool | np.bool_):
                 raise ManifoldError(f"{name}: {flag}: expected True or False, got {value!r}")

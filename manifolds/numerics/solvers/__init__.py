@@ -17,7 +17,7 @@ from .blas import limit_blas_threads
 from .gauss_newton import minimize_gauss_newton, steihaug_cg
 from .lbfgsb import minimize_lbfgsb
 from .result import OptimizationResult, SolverProblem
-from .stopping import StoppingRule
+from .stopping import StoppingRule, TraceRow
 
 #: Solver name -> ``(problem, x0, settings) -> OptimizationResult``.
 SOLVERS = {"lbfgsb": minimize_lbfgsb, "gauss-newton": minimize_gauss_newton}
@@ -39,6 +39,7 @@ __all__ = [
     "OptimizationResult",
     "SolverProblem",
     "StoppingRule",
+    "TraceRow",
     "minimize_lbfgsb",
     "minimize_gauss_newton",
     "steihaug_cg",

@@ -167,5 +167,5 @@ def minimize_gauss_newton(problem, x0, settings, rule: StoppingRule | None = Non
         history=history,
         converged=converged,
         message=message,
-        shape_changes=list(rule.shape_changes),
+        trace=list(rule.trace),
     )

@@ -58,12 +58,10 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
 
     def callback(intermediate_result):
         history.append(float(intermediate_result.fun))
-        if rule.kind != "shape":
-            return
         x = np.asarray(intermediate_result.x, dtype=float)
         f, g = fun(x)
-        why = rule.met(problem, x, f, g)
-        if why is not None:
+        why = rule.met(problem, x, f, g)  # records the iteration
+        if why is not None and rule.kind == "shape":  # scipy applies the objective rule
             reason.append(why)
             raise StopIteration
 
@@ -116,5 +114,5 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
         history=history,
         converged=converged,
         message=message,
-        shape_changes=list(rule.shape_changes),
+        trace=list(rule.trace),
     )

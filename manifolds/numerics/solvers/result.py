@@ -55,8 +55,9 @@ class OptimizationResult:
         Whether the stopping rule was met (not the iteration limit or a failure).
     message : str
         Why the run stopped.
-    shape_changes : list of float
-        Per-vertex RMS change of the output at every iteration (shape rule only).
+    trace : list of TraceRow
+        Every iteration as the stopping rule recorded it (flow passes, objective,
+        gradient, change of the output, predicted change).
     """
 
     x: np.ndarray
@@ -67,4 +68,4 @@ class OptimizationResult:
     history: list = field(default_factory=list)
     converged: bool = False
     message: str = ""
-    shape_changes: list = field(default_factory=list)
+    trace: list = field(default_factory=list)

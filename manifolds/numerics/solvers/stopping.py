@@ -15,9 +15,36 @@ Two rules (``RegistrationSettings.stopping``):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["StoppingRule"]
+__all__ = ["StoppingRule", "TraceRow"]
+
+
+@dataclass(frozen=True)
+class TraceRow:
+    """One iteration of a solver run, as the stopping rule saw it.
+
+    Attributes
+    ----------
+    flow_passes : int or None
+        Flow passes made so far (problems that count them), else None.
+    objective : float
+        Normalised objective.
+    gradient : float
+        Largest entry of the gradient in the optimiser's variables.
+    shape_change : float
+        Per-vertex RMS change of the problem's output over the iteration.
+    predicted_change : float
+        Change a preconditioned Newton step would make (``problem.predicted_change``).
+    """
+
+    flow_passes: int | None
+    objective: float
+    gradient: float
+    shape_change: float
+    predicted_change: float
 
 
 class StoppingRule:
@@ -45,7 +72,7 @@ class StoppingRule:
         self.max_iter = int(max_iter)
         self._previous_f = None
         self._previous_shape = None
-        self.shape_changes: list = []
+        self.trace: list[TraceRow] = []
 
     @classmethod
     def from_settings(cls, settings) -> StoppingRule:
@@ -75,34 +102,59 @@ class StoppingRule:
     def start(self, problem, x0, f0) -> None:
         """Record the starting point."""
         self._previous_f = float(f0)
-        self._previous_shape = (
-            np.array(problem.shape(x0), dtype=float) if self.kind == "shape" else None
-        )
-        self.shape_changes = []
+        self._previous_shape = np.array(problem.shape(x0), dtype=float)
+        self.trace: list[TraceRow] = []
+
+    @property
+    def shape_changes(self) -> list[float]:
+        """Per-iteration changes of the output recorded so far."""
+        return [row.shape_change for row in getattr(self, "trace", [])]
 
     def met(self, problem, x, f, g) -> str | None:
-        """After an iteration to ``x`` (objective ``f``, gradient ``g``): the reason to
-        stop as converged, or None."""
+        """After an iteration to ``x`` (objective ``f``, gradient ``g``): record it in
+        :attr:`trace`; return the reason to stop as converged under this rule, or None."""
         f = float(f)
         previous, self._previous_f = self._previous_f, f
-        if self.kind == "objective":
-            if previous is not None:
-                rel = (previous - f) / max(abs(previous), abs(f), 1.0)
-                if rel <= self.ftol:
-                    return f"relative decrease {rel:.3g} <= ftol"
-            if np.max(np.abs(g), initial=0.0) <= self.gtol:
-                return "largest gradient entry <= gtol"
-            return None
         shape = np.array(problem.shape(x), dtype=float)
         change = _rms(shape - self._previous_shape)
         self._previous_shape = shape
-        self.shape_changes.append(change)
-        if change > self.shape_tol:
-            return None
-        predicted = float(problem.predicted_change(x, g))
-        if predicted <= self.shape_tol:
-            return f"shape change {change:.3g} and predicted change {predicted:.3g} <= shape_tol"
+        row = TraceRow(
+            getattr(problem, "n_flow_evaluations", None),
+            f,
+            float(np.max(np.abs(g), initial=0.0)),
+            change,
+            float(problem.predicted_change(x, g)),
+        )
+        self.trace.append(row)
+        if self.kind == "objective":
+            return self._objective_reason(previous, row)
+        return self._shape_reason(row)
+
+    def _objective_reason(self, previous, row: TraceRow) -> str | None:
+        if previous is not None:
+            rel = (previous - row.objective) / max(abs(previous), abs(row.objective), 1.0)
+            if rel <= self.ftol:
+                return f"relative decrease {rel:.3g} <= ftol"
+        if row.gradient <= self.gtol:
+            return "largest gradient entry <= gtol"
         return None
+
+    def _shape_reason(self, row: TraceRow) -> str | None:
+        if row.shape_change <= self.shape_tol and row.predicted_change <= self.shape_tol:
+            return (
+                f"shape change {row.shape_change:.3g} and predicted change "
+                f"{row.predicted_change:.3g} <= shape_tol"
+            )
+        return None
+
+    def met_by_trace(self, trace: list[TraceRow]) -> bool:
+        """Whether the last iteration of ``trace`` meets this rule (e.g. another run's trace)."""
+        if not trace:
+            return False
+        if self.kind == "shape":
+            return self._shape_reason(trace[-1]) is not None
+        previous = trace[-2].objective if len(trace) > 1 else None
+        return self._objective_reason(previous, trace[-1]) is not None
 
     def accepts_stall(self, problem, x, g) -> bool:
         """Whether a run that cannot decrease the objective further has converged."""
