@@ -67,17 +67,26 @@ def _norm(space: Connection, point, vector) -> float:
     return float(np.linalg.norm(np.asarray(arr, dtype=float)))
 
 
+def _is_targets(points) -> bool:
+    """Whether ``points`` is a sequence of targets that are not arrays (e.g. data terms)."""
+    return isinstance(points, list | tuple) and any(
+        not isinstance(p, np.ndarray | list | tuple | float | int) for p in points
+    )
+
+
 def _check_inputs(space, points, weights):
     if not isinstance(space, Connection):
         raise TypeError(f"frechet_mean: space: expected a manifolds.Connection, got {space!r}")
     shape = tuple(space.point_shape)
-    pts = check_array(points, shape, "frechet_mean: points")
-    if pts.ndim != len(shape) + 1 or pts.shape[0] == 0:
+    pts = (
+        list(points) if _is_targets(points) else check_array(points, shape, "frechet_mean: points")
+    )
+    if not isinstance(pts, list) and (pts.ndim != len(shape) + 1 or pts.shape[0] == 0):
         raise ManifoldError(
             f"frechet_mean: points: expected a stack of shape (n, {', '.join(map(str, shape))}) "
             f"with n >= 1, got {pts.shape}"
         )
-    n = pts.shape[0]
+    n = len(pts)
     if weights is None:
         return pts, np.full(n, 1.0 / n)
     w = check_array(weights, (), "frechet_mean: weights")
@@ -91,7 +100,7 @@ def _check_inputs(space, points, weights):
 
 def _mean_log(space: Connection, x, pts, w):
     """``(sum_i w_i Log_x(p_i), [Log_x(p_i)])``, batched when the space supports it."""
-    if space.supports_batch:
+    if space.supports_batch and isinstance(pts, np.ndarray):
         logs = space.log(np.broadcast_to(x, pts.shape), pts)
         return np.tensordot(w, logs, axes=1), list(logs)
     logs = [space.log(x, p) for p in pts]
@@ -118,7 +127,10 @@ def frechet_mean(
     ----------
     space : manifolds.Connection
         Any space with ``exp`` and ``log`` (batched when ``space.supports_batch``).
-    points : array, shape ``(n, *point_shape)``
+    points : array, shape ``(n, *point_shape)``, or a list of targets
+        Points, or anything else ``space.log`` accepts as its second argument
+        (e.g. :class:`~manifolds.data_terms.DataTerm` objects for the landmark
+        spaces); ``initial`` is then required.
     weights : array, shape ``(n,)``, optional
         Non-negative, normalised to sum to one; uniform by default.
     initial : array, shape ``point_shape``, optional
@@ -139,6 +151,8 @@ def frechet_mean(
     step = check_float(step, "frechet_mean: step", minimum=0.0, strict=True)
     tol = check_float(tol, "frechet_mean: tol", minimum=0.0)
     max_iter = check_int(max_iter, "frechet_mean: max_iter", minimum=0)
+    if initial is None and isinstance(pts, list):
+        raise ManifoldError("frechet_mean: initial: required when the points are not arrays")
     x = pts[0].copy() if initial is None else space.check_point(initial, "initial")
     norms, variances = [], []
     for it in range(max_iter + 1):
