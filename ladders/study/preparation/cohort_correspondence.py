@@ -137,6 +137,17 @@ def _subject(name, slot, atlas, settings, factor, output, ext, fingerprint) -> d
     return record
 
 
+def _readable(entries: dict) -> dict:
+    """The subjects' meshes that can be read (the others fail later, recorded with the reason)."""
+    out = {}
+    for name, slot in entries.items():
+        try:
+            out[name] = {p: read_mesh(slot[p]) for p in ("ed", "es")}
+        except (ValueError, OSError):
+            continue
+    return out
+
+
 def _read_atlas(atlas):
     if isinstance(atlas, str | os.PathLike):
         v, f = read_mesh(atlas)
@@ -194,12 +205,10 @@ def correspond_cohort(
     atlas_mesh, atlas_ext = _read_atlas(atlas)
     ext = "." + (ext or atlas_ext).lower().lstrip(".")
     entries = scan_segmentations(meshes) if not isinstance(meshes, dict) else dict(meshes)
-    read = {n: {p: read_mesh(s[p]) for p in ("ed", "es")} for n, s in entries.items()}
     report = check_units_and_pose(
-        *atlas_mesh, read, atlas_unit=atlas_unit, units=units, allow_scale=allow_scale,
-        allow_pose=True,
+        *atlas_mesh, _readable(entries), atlas_unit=atlas_unit, units=units,
+        allow_scale=allow_scale, allow_pose=True,
     )  # fmt: skip
-    del read
     output = Path(output)
     (output / RECORDS).mkdir(parents=True, exist_ok=True)
     _atomic_mesh(output / f"atlas{ext}", *atlas_mesh)
@@ -207,7 +216,7 @@ def correspond_cohort(
     outcome = CohortCorrespondence(output, units=report.assumed_units)
     records, pending = {}, []
     for name, slot in entries.items():
-        fp = _fingerprint(settings, atlas_hash, slot, report.factors[name])
+        fp = _fingerprint(settings, atlas_hash, slot, report.factors.get(name, 1.0))
         done = (
             _reusable(output / RECORDS / f"{name}.json", fp, output, name, ext) if resume else None
         )
@@ -221,7 +230,7 @@ def correspond_cohort(
         for i, name in enumerate(outcome.reused):
             progress(i + 1, total, name, records[name])
     tasks = (
-        delayed(_subject)(n, s, atlas_mesh, settings, report.factors[n], output, ext, fp)
+        delayed(_subject)(n, s, atlas_mesh, settings, report.factors.get(n, 1.0), output, ext, fp)
         for n, s, fp in pending
     )
     for record in Parallel(n_jobs=jobs, return_as="generator")(tasks):
