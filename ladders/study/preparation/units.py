@@ -56,7 +56,7 @@ class MeshSize:
     likely_unit : str or None
         The unit the ratio suggests, when it is near a power of ten other than 1.
     offset : float
-        Distance between the centroids, in atlas sizes.
+        Distance between the centroids, in atlas sizes (the mesh in the unit assumed).
     angle : float
         Angle between the principal axes, in degrees.
     """
@@ -197,19 +197,22 @@ def check_units_and_pose(
         raise UnitsError(f"atlas_unit: expected one of {list(UNITS_IN_MM)}, got {atlas_unit!r}")
     av, af = check_mesh(atlas_vertices, atlas_faces, "check_units_and_pose: atlas")
     atlas_size, atlas_centroid, atlas_axis = _size_and_frame(av, af)
-    sizes = []
+    sizes, centroids = [], []
     for name, phases in meshes.items():
         for phase, (v, f) in phases.items():
             v, f = check_mesh(v, f, f"check_units_and_pose: {name} {phase}")
             size, centroid, axis = _size_and_frame(v, f)
             ratio = size / atlas_size
-            offset = float(np.linalg.norm(centroid - atlas_centroid) / atlas_size)
+            centroids.append(centroid)
             angle = float(np.degrees(np.arccos(min(1.0, abs(axis @ atlas_axis)))))
             unit = _unit_of_ratio(ratio, atlas_unit)
-            sizes.append(MeshSize(f"{name}:{phase}", size, ratio, unit, offset, angle))
+            sizes.append(MeshSize(f"{name}:{phase}", size, ratio, unit, 0.0, angle))
     assumed = _factors(list(meshes), sizes, units, atlas_unit)
     report = UnitsReport(atlas_size, atlas_unit, sizes, assumed_units=assumed)
     report.factors = {n: UNITS_IN_MM[u] / UNITS_IN_MM[atlas_unit] for n, u in assumed.items()}
+    for s, centroid in zip(sizes, centroids):  # offsets in the atlas's unit
+        moved = centroid * report.factors[s.name.split(":")[0]]
+        s.offset = float(np.linalg.norm(moved - atlas_centroid) / atlas_size)
     bad_scale = [
         s
         for s in sizes
@@ -221,7 +224,9 @@ def check_units_and_pose(
             + "\nGive the meshes' unit (units='m', 'cm', 'mm' or 'auto'; --units) or accept the "
             "sizes (allow_scale=True; --allow-scale)."
         )
-    far = [s for s in sizes if s.offset > max_offset or s.angle > max_angle]
+    far = [  # a mesh of another scale (accepted) has no comparable pose
+        s for s in sizes if s not in bad_scale and (s.offset > max_offset or s.angle > max_angle)
+    ]
     if far and not allow_pose:
         raise UnitsError(
             _message(far, atlas_size, atlas_unit, "lie(s) far from the atlas's pose")
