@@ -45,7 +45,9 @@ _TERMS = {"varifold": VarifoldDistance, "current": CurrentDistance}
 
 
 def _default_registration() -> RegistrationSettings:
-    return RegistrationSettings(sigma=20.0, control_points="grid", max_iter=300, ftol=1e-9)
+    return RegistrationSettings(
+        sigma=20.0, control_points="grid", max_iter=300, stopping="shape", shape_tol=0.01
+    )
 
 
 @dataclass(frozen=True)
@@ -57,7 +59,8 @@ class CorrespondenceSettings:
     registration : RegistrationSettings
         The LDDMM registration of the atlas onto a mesh (kernel width ``sigma``,
         control points, optimiser). Default: ``sigma = 20``, grid control points,
-        at most 300 L-BFGS-B iterations, ``ftol = 1e-9``.
+        at most 300 L-BFGS-B iterations, stopped when the deformed atlas moves by
+        less than ``shape_tol = 0.01`` (per-vertex RMS, the atlas's unit).
     alpha : float
         Regularisation weight (``alpha^2`` multiplies ``||v||_H^2``).
     sigma_w : float
@@ -202,8 +205,8 @@ def correspond_mesh(
     term = settings.data_term_for(moved, mf, tf)
     res = register(tv, term, settings.alpha, settings.registration, warn=False)
     quality = {
-        "distance_before": term.distance(tv) / np.sqrt(term.weight),
-        "distance_after": term.distance(res.deformed) / np.sqrt(term.weight),
+        "distance_before": float(term.distance(tv) / np.sqrt(term.weight)),
+        "distance_after": float(term.distance(res.deformed) / np.sqrt(term.weight)),
         **{
             k: v
             for k, v in surface_distances(res.deformed, tf, moved, mf).items()
