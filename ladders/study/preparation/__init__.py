@@ -2,7 +2,8 @@
 
 - :mod:`.units`: :func:`check_units_and_pose`, sizes and poses against the atlas's;
 - :mod:`.alignment`: :class:`SimilarityTransform`, :func:`procrustes` (with
-  correspondence) and :func:`icp_align` (without);
+  correspondence) and :func:`icp_align` (without); :mod:`.affine`: the affine
+  pre-alignment of the atlas (:func:`affine_icp`);
 - :mod:`.correspondence`: :func:`correspond_mesh` and :func:`correspond_subject`,
   the atlas registered onto a mesh of any triangulation with a varifold term;
 - :mod:`.cohort_correspondence`: :func:`correspond_cohort`, a folder of
@@ -10,9 +11,11 @@
   (:mod:`.quality_table`), failures recorded and resume;
 - :mod:`.atlas`: :func:`estimate_atlas`, the LDDMM atlas of end-diastolic meshes;
 - :mod:`.surface_distance`: Hausdorff and mean surface distances;
-- :mod:`.remeshing`: :func:`remesh`, another triangulation of a surface (tests, tutorial).
+- :mod:`.remeshing`: :func:`remesh`, another triangulation of a surface;
+  :mod:`.simulation`: :func:`simulate_segmentations` of a cohort (tests, tutorial).
 """
 
+from .affine import affine_icp, apply_affine
 from .alignment import (
     SimilarityTransform,
     icp_align,
@@ -31,10 +34,13 @@ from .correspondence import (
 )
 from .quality_table import quality_rows, write_quality_table
 from .remeshing import remesh
+from .simulation import simulate_segmentations
 from .surface_distance import distances_to_surface, surface_distances
 from .units import UNITS_IN_MM, MeshSize, UnitsError, UnitsReport, check_units_and_pose
 
 __all__ = [
+    "affine_icp",
+    "apply_affine",
     "SimilarityTransform",
     "procrustes",
     "icp_align",
@@ -53,6 +59,7 @@ __all__ = [
     "quality_rows",
     "write_quality_table",
     "remesh",
+    "simulate_segmentations",
     "distances_to_surface",
     "surface_distances",
     "UNITS_IN_MM",

@@ -1,7 +1,8 @@
 """Bring a subject's meshes into the atlas's vertex correspondence (any vertex count or format).
 
 For one mesh (:func:`correspond_mesh`): align it rigidly onto the atlas (ICP,
-or a transform given), register the atlas onto it with a surface data term
+or a transform given), move the atlas by an affine fit onto it (:mod:`.affine`),
+register the atlas onto it with a surface data term
 (varifold by default, :class:`~manifolds.data_terms.VarifoldDistance`) and
 return the deformed atlas, which has the atlas's vertices, order and faces and
 lies on the subject's surface, with its quality: the data term's distance
@@ -30,6 +31,7 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.lddmm import RegistrationResult, RegistrationSettings, register
 from manifolds.validation import check_float
 
+from .affine import affine_icp, apply_affine
 from .alignment import SimilarityTransform, icp_align, procrustes
 from .surface_distance import surface_distances
 
@@ -72,6 +74,9 @@ class CorrespondenceSettings:
     data_term : {"varifold", "current"}
     alignment : {"icp", "none"}
         Rigid alignment of end-diastole onto the atlas before the registration.
+    prealign : {"affine", "none"}
+        Move the template by the affine fit onto the mesh (:mod:`.affine`) before
+        the registration, so that the deformation does not slide its vertices.
     scale : bool
         Fit a similarity (with ``"icp"``) instead of a rigid motion.
     final_procrustes : bool
@@ -89,6 +94,7 @@ class CorrespondenceSettings:
     weight: float | str = "landmarks"
     data_term: str = "varifold"
     alignment: str = "icp"
+    prealign: str = "affine"
     scale: bool = False
     final_procrustes: bool = True
     es_template: str = "ed"
@@ -107,6 +113,7 @@ class CorrespondenceSettings:
         for key, choices in (
             ("data_term", tuple(_TERMS)),
             ("alignment", ("icp", "none")),
+            ("prealign", ("affine", "none")),
             ("es_template", ("ed", "atlas")),
         ):
             if getattr(self, key) not in choices:
@@ -156,12 +163,16 @@ class MeshCorrespondence:
         ``hausdorff``, ``mean_surface_distance`` (to the aligned input mesh, the
         atlas's unit), ``converged``, ``n_iter``.
     registration : RegistrationResult
+        The registration of the (affinely moved) template onto the mesh.
+    affine : array, shape ``(4, 4)``
+        The affine pre-alignment applied to the template (the identity without).
     """
 
     vertices: np.ndarray
     transform: SimilarityTransform
     quality: dict
     registration: RegistrationResult
+    affine: np.ndarray = field(default_factory=lambda: np.eye(4))
 
 
 def correspond_mesh(
@@ -202,8 +213,10 @@ def correspond_mesh(
             av, af = (tv, tf) if align_to is None else align_to
             transform, _ = icp_align(mv, mf, av, af, scale=settings.scale)
     moved = transform.apply(mv)
+    affine = affine_icp(tv, tf, moved, mf) if settings.prealign == "affine" else np.eye(4)
     term = settings.data_term_for(moved, mf, tf)
-    res = register(tv, term, settings.alpha, settings.registration, warn=False)
+    start = apply_affine(affine, tv)
+    res = register(start, term, settings.alpha, settings.registration, warn=False)
     quality = {
         "distance_before": float(term.distance(tv) / np.sqrt(term.weight)),
         "distance_after": float(term.distance(res.deformed) / np.sqrt(term.weight)),
@@ -215,7 +228,7 @@ def correspond_mesh(
         "converged": bool(res.converged),
         "n_iter": int(res.n_iter),
     }
-    return MeshCorrespondence(np.array(res.deformed), transform, quality, res)
+    return MeshCorrespondence(np.array(res.deformed), transform, quality, res, affine)
 
 
 @dataclass
