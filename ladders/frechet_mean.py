@@ -141,7 +141,9 @@ def frechet_mean(
         Stop when ``|G(x)|`` is at most ``tol`` (in the space's norm if it has one).
     max_iter : int, default 100
     callback : callable, optional
-        ``callback(iteration, x, gradient_norm)`` after every evaluation of ``G``.
+        ``callback(iteration, x, gradient_norm)`` after every evaluation of ``G``;
+        a true return value stops the iteration as converged (a criterion of the
+        caller's, e.g. on the shape's displacement).
 
     Returns
     -------
@@ -159,8 +161,10 @@ def frechet_mean(
         g, logs = _mean_log(space, x, pts, w)
         norms.append(_norm(space, x, g))
         variances.append(float(sum(wi * _norm(space, x, v) ** 2 for wi, v in zip(w, logs))))
-        if callback is not None:
-            callback(it, x, norms[-1])
+        if callback is not None and callback(it, x, norms[-1]):
+            return FrechetMeanResult(
+                x, True, it, norms, variances, f"stopped by the callback at {it}"
+            )
         if norms[-1] <= tol:
             return FrechetMeanResult(x, True, it, norms, variances, f"|G| <= tol after {it}")
         if it == max_iter:

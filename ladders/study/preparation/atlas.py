@@ -3,7 +3,7 @@
 The atlas is the Fréchet (Karcher) mean in the LDDMM landmark space
 (:func:`ladders.frechet_mean`): from a start ``T``, register ``T`` onto every
 subject, average the momenta at ``T``'s control points and shoot ``T`` with the
-average, until the average is small. When the meshes are in correspondence the
+average, until an iteration moves ``T`` by less than a tolerance. When the meshes are in correspondence the
 targets are the subjects' vertices (the squared-distance data term); when they
 are not, each target is a varifold (or current) data term towards the
 subject's mesh, and the atlas keeps the triangulation of its start. The start
@@ -41,7 +41,7 @@ class AtlasResult:
     vertices : array, shape ``(k, 3)``
     faces : int array, shape ``(f, 3)``
     converged : bool
-        The norm of the averaged momenta fell below ``tol``.
+        An iteration moved the atlas by at most ``tol``.
     n_iter : int
     objectives : list of float
         ``sum_i C_i`` (registration objectives of the current atlas onto every subject),
@@ -109,8 +109,10 @@ def estimate_atlas(
     align : bool, default True
         Align every mesh rigidly onto the start first.
     tol : float, default 0.1
-        Stop when the RKHS norm of the averaged momenta (a velocity, in the
-        meshes' unit) is at most ``tol``.
+        Stop when an iteration moves the atlas by at most ``tol`` (per-vertex RMS,
+        the meshes' unit). (The RKHS norm of the averaged momenta, also reported,
+        need not vanish: momenta at control points far from the shape barely move
+        it.)
     max_iter : int, default 10
     progress : callable, optional
         ``progress(iteration, objective, gradient_norm)`` after every iteration.
@@ -143,14 +145,17 @@ def estimate_atlas(
         targets = [settings.data_term_for(v, f, start_f) for v, f in moved]
     space = LDDMMLandmarks(len(start_v), 3, alpha=settings.alpha, settings=settings.registration,
                            cache_size=len(meshes) + 1)  # fmt: skip
-    objectives = []
+    objectives, previous = [], [start_v]
 
     def report(it, x, gnorm):
         objectives.append(float(sum(space.register(x, t).objective for t in targets)))
+        moved = float(np.sqrt(((x - previous[-1]) ** 2).sum(1).mean()))
+        previous.append(x)
         if progress is not None:
             progress(it, objectives[-1], gnorm)
+        return it > 0 and moved <= tol
 
-    res = frechet_mean(space, targets, initial=start_v, tol=tol, max_iter=max_iter, callback=report)
+    res = frechet_mean(space, targets, initial=start_v, tol=0.0, max_iter=max_iter, callback=report)
     return AtlasResult(
         np.array(res.mean), start_f, res.converged, res.n_iter, objectives, res.gradient_norms,
         transforms, corresponding, res.message,
