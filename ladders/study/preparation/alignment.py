@@ -9,7 +9,8 @@ vector fixed). Without correspondence, :func:`icp_align` runs the iterative
 closest point algorithm of :func:`trimesh.registration.icp` (point-to-surface
 with the target given as a mesh) from several starts: the centroids matched
 and the principal axes matched in each of their four orientations that make
-a rotation, keeping the best final cost. Two meshes whose shapes differ are
+a rotation, each run point to point on the target's vertices and triangle
+centres (fast), the best one refined point to surface. Two meshes whose shapes differ are
 then aligned by their surfaces, not by an anatomical frame; a corresponded
 pair is best aligned again by :func:`procrustes` on its vertices. A rotation
 that leaves the target surface unchanged (e.g. about the axis of an
@@ -195,8 +196,9 @@ def icp_align(
     """Align a mesh onto another surface by ICP (no correspondence needed).
 
     :func:`trimesh.registration.icp` moves the source vertices onto the closest
-    points of the target surface, from ``initial`` or, by default, from the four
-    principal-axes starts of the module docstring, keeping the lowest cost.
+    points of the target, from ``initial`` or, by default, from the four
+    principal-axes starts of the module docstring (point to point, keeping the
+    lowest cost), and refines the best point to surface.
 
     Parameters
     ----------
@@ -222,14 +224,22 @@ def icp_align(
     tv, tf = check_mesh(target_vertices, target_faces, "icp_align: target")
     surface = trimesh.Trimesh(tv, tf, process=False)
     starts = [initial] if initial is not None else list(_starts(sv, sf, tv, tf))
+    # every start by point-to-point ICP (k-d tree) on the target's vertices and triangle
+    # centres, then the best one refined point-to-surface (R-tree, slower)
+    cloud = np.vstack([tv, tv[tf].mean(axis=1)])
     best = None
     for start in starts:
         matrix, _, cost = trimesh.registration.icp(
-            sv, surface, initial=start.matrix, threshold=threshold,
+            sv, cloud, initial=start.matrix, threshold=threshold,
             max_iterations=max_iterations, reflection=False, scale=scale,
         )  # fmt: skip
         if best is None or cost < best[1]:
             best = (matrix, float(cost))
+    matrix, _, _ = trimesh.registration.icp(
+        sv, surface, initial=best[0], threshold=threshold, max_iterations=max_iterations,
+        reflection=False, scale=scale,
+    )  # fmt: skip
+    best = (matrix, None)
     transform = SimilarityTransform.from_matrix(best[0])
     distance = trimesh.proximity.closest_point(surface, transform.apply(sv))[1]
     return transform, float(distance.mean())
