@@ -34,7 +34,7 @@ from .correspondence import (
 )
 from .quality_table import quality_rows, write_quality_table
 from .remeshing import remesh
-from .simulation import simulate_segmentations
+from .simulation import procrustes_aligned, recovery_errors, simulate_segmentations
 from .surface_distance import distances_to_surface, surface_distances
 from .units import UNITS_IN_MM, MeshSize, UnitsError, UnitsReport, check_units_and_pose
 
@@ -60,6 +60,8 @@ __all__ = [
     "write_quality_table",
     "remesh",
     "simulate_segmentations",
+    "recovery_errors",
+    "procrustes_aligned",
     "distances_to_surface",
     "surface_distances",
     "UNITS_IN_MM",
