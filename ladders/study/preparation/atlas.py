@@ -84,6 +84,22 @@ def _start(meshes, initial, corresponding):
     return meshes[index]
 
 
+def _aligned_targets(meshes, start_v, start_f, corresponding, align, settings):
+    """The rigid alignment of each mesh onto the start and the registration targets."""
+    transforms = []
+    for v, f in meshes:
+        if not align:
+            transforms.append(SimilarityTransform.identity())
+        elif corresponding:
+            transforms.append(procrustes(v, start_v))
+        else:
+            transforms.append(icp_align(v, f, start_v, start_f)[0])
+    moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
+    if corresponding:
+        return transforms, np.stack([v for v, _ in moved])
+    return transforms, [settings.data_term_for(v, f, start_f) for v, f in moved]
+
+
 def estimate_atlas(
     meshes,
     settings: CorrespondenceSettings | None = None,
@@ -130,19 +146,7 @@ def estimate_atlas(
     corresponding = all(v.shape == v0.shape and np.array_equal(f, f0) for v, f in meshes)
     start_v, start_f = _start(meshes, initial, corresponding)
     corresponding = corresponding and start_v.shape == v0.shape and np.array_equal(start_f, f0)
-    transforms = []
-    for v, f in meshes:
-        if not align:
-            transforms.append(SimilarityTransform.identity())
-        elif corresponding:
-            transforms.append(procrustes(v, start_v))
-        else:
-            transforms.append(icp_align(v, f, start_v, start_f)[0])
-    moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
-    if corresponding:
-        targets = np.stack([v for v, _ in moved])
-    else:
-        targets = [settings.data_term_for(v, f, start_f) for v, f in moved]
+    transforms, targets = _aligned_targets(meshes, start_v, start_f, corresponding, align, settings)
     space = LDDMMLandmarks(len(start_v), 3, alpha=settings.alpha, settings=settings.registration,
                            cache_size=len(meshes) + 1)  # fmt: skip
     objectives, previous = [], [start_v]

@@ -116,7 +116,19 @@ def _reusable(
     return record if done and meshes else None
 
 
-def _subject(name, slot, atlas, settings, factor, output, ext, fingerprint) -> dict:
+def _run(tasks, records, outcome, jobs, progress, total):
+    """Report the reused subjects, then run ``tasks`` and report each as it finishes."""
+    if progress is not None:
+        for i, name in enumerate(outcome.reused):
+            progress(i + 1, total, name, records[name])
+    for record in Parallel(n_jobs=jobs, return_as="generator")(tasks):
+        outcome.computed.append(record["subject"])
+        if progress is not None:
+            progress(len(outcome.reused) + len(outcome.computed), total, record["subject"], record)
+        yield record
+
+
+def _subject(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -> dict:
     """Correspond one subject; the record (status ok or failed) is written last."""
     record = {"subject": name, "fingerprint": fingerprint, "unit_factor": factor}
     try:
@@ -212,32 +224,22 @@ def correspond_cohort(
     output = Path(output)
     (output / RECORDS).mkdir(parents=True, exist_ok=True)
     _atomic_mesh(output / f"atlas{ext}", *atlas_mesh)
-    atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
     outcome = CohortCorrespondence(output, units=report.assumed_units)
+    atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
+    jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext)
+    factors = {n: report.factors.get(n, 1.0) for n in entries}
     records, pending = {}, []
     for name, slot in entries.items():
-        fp = _fingerprint(settings, atlas_hash, slot, report.factors.get(name, 1.0))
-        done = (
-            _reusable(output / RECORDS / f"{name}.json", fp, output, name, ext) if resume else None
-        )
-        if done is not None:
+        fp = _fingerprint(settings, atlas_hash, slot, factors[name])
+        done = _reusable(output / RECORDS / f"{name}.json", fp, output, name, ext)
+        if resume and done is not None:
             records[name] = done
             outcome.reused.append(name)
         else:
-            pending.append((name, slot, fp))
-    total = len(entries)
-    if progress is not None:
-        for i, name in enumerate(outcome.reused):
-            progress(i + 1, total, name, records[name])
-    tasks = (
-        delayed(_subject)(n, s, atlas_mesh, settings, report.factors.get(n, 1.0), output, ext, fp)
-        for n, s, fp in pending
-    )
-    for record in Parallel(n_jobs=jobs, return_as="generator")(tasks):
+            pending.append(delayed(_subject)(name, slot, factor=factors[name], fingerprint=fp,
+                                             **jobs_args))  # fmt: skip
+    for record in _run(pending, records, outcome, jobs, progress, len(entries)):
         records[record["subject"]] = record
-        outcome.computed.append(record["subject"])
-        if progress is not None:
-            progress(len(records), total, record["subject"], record)
     outcome.records = [records[n] for n in entries]
     outcome.failed = [r["subject"] for r in outcome.records if r["status"] != "ok"]
     write_quality_table(outcome.records, output, settings, report.assumed_units)

@@ -135,6 +135,21 @@ def _factors(names, sizes: list[MeshSize], units, atlas_unit) -> dict:
     return chosen
 
 
+def _measure(meshes: dict, atlas_size, atlas_axis, atlas_unit):
+    """Per mesh, its :class:`MeshSize` (offset still zero) and its centroid in its own unit."""
+    sizes, centroids = [], []
+    for name, phases in meshes.items():
+        for phase, (v, f) in phases.items():
+            v, f = check_mesh(v, f, f"check_units_and_pose: {name} {phase}")
+            size, centroid, axis = _size_and_frame(v, f)
+            ratio = size / atlas_size
+            angle = float(np.degrees(np.arccos(min(1.0, abs(axis @ atlas_axis)))))
+            unit = _unit_of_ratio(ratio, atlas_unit)
+            sizes.append(MeshSize(f"{name}:{phase}", size, ratio, unit, 0.0, angle))
+            centroids.append(centroid)
+    return sizes, centroids
+
+
 def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str) -> str:
     lines = [
         f"{len(bad)} mesh(es) {what} (atlas size {atlas_size:.4g} {atlas_unit}, the RMS "
@@ -197,27 +212,14 @@ def check_units_and_pose(
         raise UnitsError(f"atlas_unit: expected one of {list(UNITS_IN_MM)}, got {atlas_unit!r}")
     av, af = check_mesh(atlas_vertices, atlas_faces, "check_units_and_pose: atlas")
     atlas_size, atlas_centroid, atlas_axis = _size_and_frame(av, af)
-    sizes, centroids = [], []
-    for name, phases in meshes.items():
-        for phase, (v, f) in phases.items():
-            v, f = check_mesh(v, f, f"check_units_and_pose: {name} {phase}")
-            size, centroid, axis = _size_and_frame(v, f)
-            ratio = size / atlas_size
-            centroids.append(centroid)
-            angle = float(np.degrees(np.arccos(min(1.0, abs(axis @ atlas_axis)))))
-            unit = _unit_of_ratio(ratio, atlas_unit)
-            sizes.append(MeshSize(f"{name}:{phase}", size, ratio, unit, 0.0, angle))
+    sizes, centroids = _measure(meshes, atlas_size, atlas_axis, atlas_unit)
     assumed = _factors(list(meshes), sizes, units, atlas_unit)
     report = UnitsReport(atlas_size, atlas_unit, sizes, assumed_units=assumed)
     report.factors = {n: UNITS_IN_MM[u] / UNITS_IN_MM[atlas_unit] for n, u in assumed.items()}
+    factor = {s.name: report.factors[s.name.split(":")[0]] for s in sizes}
     for s, centroid in zip(sizes, centroids):  # offsets in the atlas's unit
-        moved = centroid * report.factors[s.name.split(":")[0]]
-        s.offset = float(np.linalg.norm(moved - atlas_centroid) / atlas_size)
-    bad_scale = [
-        s
-        for s in sizes
-        if abs(np.log10(s.ratio * report.factors[s.name.split(":")[0]])) >= _SCALE_TOLERANCE
-    ]
+        s.offset = float(np.linalg.norm(centroid * factor[s.name] - atlas_centroid) / atlas_size)
+    bad_scale = [s for s in sizes if abs(np.log10(s.ratio * factor[s.name])) >= _SCALE_TOLERANCE]
     if bad_scale and not allow_scale:
         raise UnitsError(
             _message(bad_scale, atlas_size, atlas_unit, "disagree(s) in size with the atlas")
