@@ -19,7 +19,7 @@ from manifolds.data_terms import (
 )
 from manifolds.data_terms.surface_distance import surface_features
 from manifolds.data_terms.surface_kernels import pair_sum
-from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, register
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, register
 
 TERMS = {"current": CurrentDistance, "varifold": VarifoldDistance}
 
@@ -270,3 +270,13 @@ def test_landmark_space_log_and_register_accept_a_data_term(ellipsoid_pair):
     small = VarifoldDistance(tv, tf, faces[:10], 0.15)  # reads fewer points than the space has
     with pytest.raises(ManifoldError, match="template points"):
         space.log(template, small)
+
+
+def test_svf_space_registers_onto_a_data_term(ellipsoid_pair):
+    template, _, faces, tv, tf = ellipsoid_pair
+    space = SVFLandmarks(len(template), 3, sigma=0.5, alpha=0.1, control_points="grid")
+    res = space.register(template, VarifoldDistance(tv, tf, faces, 0.15, weight="landmarks"))
+    surface = trimesh.Trimesh(tv, tf, process=False)
+    before = trimesh.proximity.closest_point(surface, template)[1]
+    after = trimesh.proximity.closest_point(surface, res.deformed)[1]
+    assert after.mean() < 0.2 * before.mean()
