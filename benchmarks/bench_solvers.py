@@ -147,7 +147,8 @@ def bench(args, cache: dict, save) -> list[dict]:
                     if combo.startswith("lbfgsb-scaled") and setting != "opt45":
                         continue
                     overrides, warm = COMBOS[combo]
-                    if warm and not pairs:
+                    combo_pairs = pairs and combo not in args.no_pairs_for_combos
+                    if warm and not combo_pairs:
                         continue
                     settings = _settings(setting, overrides, args.max_iter)
                     reg = run_row(cache, f"{base}/{combo}/registration", lambda s=settings,
@@ -155,7 +156,7 @@ def bench(args, cache: dict, save) -> list[dict]:
                     save()
                     row = {"setting": setting, "alpha2": alpha2, "subject": subject,
                            "combo": combo, **{k: v for k, v in reg.items() if k != "trace"}}  # fmt: skip
-                    if pairs:
+                    if combo_pairs:
                         pair = run_row(cache, f"{base}/{combo}/pair", lambda s=settings, a=alpha2,
                                        j=subject, w=warm: _pair_row(cohort, j, a, s, w))  # fmt: skip
                         save()
@@ -259,6 +260,11 @@ def main(argv=None) -> None:
     parser.add_argument("--subjects", type=int, default=2)
     parser.add_argument("--combos", default=",".join(COMBOS))
     parser.add_argument("--no-pairs-for", default="dense", help="settings without pair cells")
+    parser.add_argument(
+        "--no-pairs-for-combos",
+        default="gauss-newton/shape/cold",
+        help="combinations measured on the registration alone (no pair cells)",
+    )
     parser.add_argument("--max-iter", type=int, default=5000)
     parser.add_argument("--reference-max-iter", type=int, default=20000)
     parser.add_argument("--cache", type=Path, default=Path("symladders-output/bench_solvers.json"))
@@ -270,6 +276,7 @@ def main(argv=None) -> None:
     args.alpha2 = [float(a) for a in args.alpha2.split(",") if a]
     args.subjects = list(range(args.subjects))
     args.no_pairs_for = set(filter(None, args.no_pairs_for.split(",")))
+    args.no_pairs_for_combos = set(filter(None, args.no_pairs_for_combos.split(",")))
     for name, known in (("settings", SETTINGS), ("combos", COMBOS)):
         unknown = sorted(set(getattr(args, name)) - set(known))
         if unknown:

@@ -3,8 +3,8 @@
 Everything here uses only the connection API of :mod:`manifolds` (``exp``,
 ``log``, ``midpoint``, ``symmetry``, ``transvection``), so it runs unchanged on
 every space: the pole ladder and Schild's ladder (one rung driver), the fanning
-scheme, the paper's symmetry errors, log-log convergence studies and the
-``nabla R`` expansion of transvections.
+scheme, the weighted Fréchet (Karcher) mean, the paper's symmetry errors, log-log
+convergence studies and the ``nabla R`` expansion of transvections.
 
 The paper's application (cohorts, mesh I/O, area strain, the Section 3 study,
 its report and the ``symladders`` command line) lives in :mod:`ladders.study`,
@@ -19,6 +19,7 @@ from .fanning import (
     fanning_scheme,
     fanning_transport,
 )
+from .frechet_mean import FrechetMeanResult, frechet_mean
 from .pole_ladder import pole_ladder
 from .rungs import LadderTrajectory
 from .schild_ladder import schild_ladder
@@ -50,6 +51,8 @@ __all__ = [
     "NoMomentumFlowError",
     "fanning_scheme",
     "fanning_transport",
+    "FrechetMeanResult",
+    "frechet_mean",
     "NABLA_R_COEFFICIENTS",
     "transvection_expansion",
 ]

@@ -12,7 +12,7 @@ residual-augmented space :class:`ResidualAugmented`. Numerical methods live in
 """
 
 from .connection import Connection
-from .data_terms import DataTerm, SquaredDistance
+from .data_terms import CurrentDistance, DataTerm, SquaredDistance, VarifoldDistance
 from .errors import (
     ConvergenceError,
     ConvergenceWarning,
@@ -61,6 +61,8 @@ __all__ = [
     "RegistrationSettings",
     "DataTerm",
     "SquaredDistance",
+    "CurrentDistance",
+    "VarifoldDistance",
     "register",
     "SVFLandmarks",
     "StationaryFlow",

@@ -26,15 +26,21 @@ __all__ = [
     "convolve_vjp",
     "hamiltonian_vjp",
     "gaussian",
+    "gexp",
+    "to_soa",
+    "from_soa",
+    "check_dim",
+    "use_parallel",
+    "JIT_FLAGS",
     "solve_lower",
 ]
 
 PARALLEL_MIN_PAIRS = 2_000_000
-_FLAGS = {"fastmath": True, "cache": True, "nogil": True}
+JIT_FLAGS = {"fastmath": True, "cache": True, "nogil": True}
 
 
-@njit(inline="always", **_FLAGS)
-def _gexp(x):  # pragma: no cover - compiled
+@njit(inline="always", **JIT_FLAGS)
+def gexp(x):  # pragma: no cover - compiled
     """``exp(x)`` for ``x <= 0``: Taylor polynomial of ``exp(x / 64)`` raised to the 64th power."""
     t = x * 0.015625 + 0.3125
     p = 1.0 / 6227020800.0
@@ -61,28 +67,28 @@ def _gexp(x):  # pragma: no cover - compiled
     return p if x > -40.0 else 0.0
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _gexp_array(x):  # pragma: no cover - compiled
     out = np.empty_like(x)
     for i in range(x.size):
-        out[i] = _gexp(x[i])
+        out[i] = gexp(x[i])
     return out
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _conv_row(i, x, c, mom, inv_s2, out):  # pragma: no cover - compiled
     x0, x1, x2 = x[0, i], x[1, i], x[2, i]
     v0 = v1 = v2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = x0 - c[0, j], x1 - c[1, j], x2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         v0 += k * mom[0, j]
         v1 += k * mom[1, j]
         v2 += k * mom[2, j]
     out[0, i], out[1, i], out[2, i] = v0, v1, v2
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _rhs_row(i, c, mu, inv_s2, dc, dmu):  # pragma: no cover - compiled
     c0, c1, c2 = c[0, i], c[1, i], c[2, i]
     m0, m1, m2 = mu[0, i], mu[1, i], mu[2, i]
@@ -90,7 +96,7 @@ def _rhs_row(i, c, mu, inv_s2, dc, dmu):  # pragma: no cover - compiled
     f0 = f1 = f2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = c0 - c[0, j], c1 - c[1, j], c2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         n0, n1, n2 = mu[0, j], mu[1, j], mu[2, j]
         v0 += k * n0
         v1 += k * n1
@@ -104,7 +110,7 @@ def _rhs_row(i, c, mu, inv_s2, dc, dmu):  # pragma: no cover - compiled
     dmu[0, i], dmu[1, i], dmu[2, i] = s * f0, s * f1, s * f2
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _hvjp_row(i, c, mu, a, b, inv_s2, g_c, g_mu):  # pragma: no cover - compiled
     s = 2.0 * inv_s2
     c0, c1, c2 = c[0, i], c[1, i], c[2, i]
@@ -115,7 +121,7 @@ def _hvjp_row(i, c, mu, a, b, inv_s2, g_c, g_mu):  # pragma: no cover - compiled
     gc0 = gc1 = gc2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = c0 - c[0, j], c1 - c[1, j], c2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         n0, n1, n2 = mu[0, j], mu[1, j], mu[2, j]
         aj0, aj1, aj2 = a[0, j], a[1, j], a[2, j]
         e0, e1, e2 = b0 - b[0, j], b1 - b[1, j], b2 - b[2, j]
@@ -134,7 +140,7 @@ def _hvjp_row(i, c, mu, a, b, inv_s2, g_c, g_mu):  # pragma: no cover - compiled
     g_c[0, i], g_c[1, i], g_c[2, i] = s * gc0, s * gc1, s * gc2
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _cvjp_row(i, t, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover
     s = 2.0 * inv_s2
     x0, x1, x2 = x[0, i], x[1, i], x[2, i]
@@ -142,7 +148,7 @@ def _cvjp_row(i, t, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no co
     gx0 = gx1 = gx2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = x0 - c[0, j], x1 - c[1, j], x2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         buf_m[t, 0, j] += k * a0
         buf_m[t, 1, j] += k * a1
         buf_m[t, 2, j] += k * a2
@@ -156,43 +162,43 @@ def _cvjp_row(i, t, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no co
     g_x[0, i], g_x[1, i], g_x[2, i] = gx0, gx1, gx2
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _conv_par(x, c, mom, inv_s2, out):  # pragma: no cover - compiled
     for i in prange(x.shape[1]):
         _conv_row(i, x, c, mom, inv_s2, out)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _conv_ser(x, c, mom, inv_s2, out):  # pragma: no cover - compiled
     for i in range(x.shape[1]):
         _conv_row(i, x, c, mom, inv_s2, out)
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _rhs_par(c, mu, inv_s2, dc, dmu):  # pragma: no cover - compiled
     for i in prange(c.shape[1]):
         _rhs_row(i, c, mu, inv_s2, dc, dmu)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _rhs_ser(c, mu, inv_s2, dc, dmu):  # pragma: no cover - compiled
     for i in range(c.shape[1]):
         _rhs_row(i, c, mu, inv_s2, dc, dmu)
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _hvjp_par(c, mu, a, b, inv_s2, g_c, g_mu):  # pragma: no cover - compiled
     for i in prange(c.shape[1]):
         _hvjp_row(i, c, mu, a, b, inv_s2, g_c, g_mu)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _hvjp_ser(c, mu, a, b, inv_s2, g_c, g_mu):  # pragma: no cover - compiled
     for i in range(c.shape[1]):
         _hvjp_row(i, c, mu, a, b, inv_s2, g_c, g_mu)
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _cvjp_par(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - compiled
     n, n_chunks = x.shape[1], buf_c.shape[0]
     for t in prange(n_chunks):
@@ -200,7 +206,7 @@ def _cvjp_par(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - 
             _cvjp_row(i, t, x, c, mom, cot, inv_s2, g_x, buf_c, buf_m)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _cvjp_ser(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - compiled
     n, n_chunks = x.shape[1], buf_c.shape[0]
     for t in range(n_chunks):
@@ -211,7 +217,7 @@ def _cvjp_ser(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - 
 CVJP_CHUNKS = 8
 
 
-def _soa(arr: np.ndarray) -> np.ndarray:
+def to_soa(arr: np.ndarray) -> np.ndarray:
     """``(n, d)`` -> contiguous ``(3, n)`` with zero padding for ``d < 3``."""
     arr = np.asarray(arr, dtype=np.float64)
     out = np.zeros((3, arr.shape[0]))
@@ -219,17 +225,20 @@ def _soa(arr: np.ndarray) -> np.ndarray:
     return out
 
 
-def _aos(arr: np.ndarray, d: int) -> np.ndarray:
+def from_soa(arr: np.ndarray, d: int) -> np.ndarray:
+    """Contiguous ``(3, n)`` -> ``(n, d)``: the inverse of :func:`to_soa`."""
     return np.ascontiguousarray(arr[:d].T)
 
 
-def _check_dim(*arrays):
+def check_dim(*arrays):
+    """Raise a ``ValueError`` unless every array is ``(n, d)`` with ``d <= 3``."""
     for arr in arrays:
         if arr.ndim != 2 or arr.shape[1] not in (1, 2, 3):
             raise ValueError(f"kernels_numba: expected (n, d) arrays with d <= 3, got {arr.shape}")
 
 
-def _parallel(n_pairs: int) -> bool:
+def use_parallel(n_pairs: int) -> bool:
+    """Whether a sum over ``n_pairs`` pairs runs its parallel loop (above ``PARALLEL_MIN_PAIRS``)."""
     return n_pairs >= PARALLEL_MIN_PAIRS and numba.get_num_threads() > 1
 
 
@@ -241,38 +250,38 @@ def gaussian(sq_dist: np.ndarray) -> np.ndarray:
 
 def convolve(x, c, mom, inv_s2):
     """``sum_j K(x_i, c_j) mom_j``, shape ``(len(x), d)``."""
-    _check_dim(x, c, mom)
+    check_dim(x, c, mom)
     out = np.empty((3, x.shape[0]))
-    fn = _conv_par if _parallel(x.shape[0] * c.shape[0]) else _conv_ser
-    fn(_soa(x), _soa(c), _soa(mom), float(inv_s2), out)
-    return _aos(out, mom.shape[1])
+    fn = _conv_par if use_parallel(x.shape[0] * c.shape[0]) else _conv_ser
+    fn(to_soa(x), to_soa(c), to_soa(mom), float(inv_s2), out)
+    return from_soa(out, mom.shape[1])
 
 
 def hamiltonian_rhs(c, mu, inv_s2):
     """``(K mu, (2/sigma^2) sum_j (mu_i . mu_j) K_ij (c_i - c_j))``."""
-    _check_dim(c, mu)
+    check_dim(c, mu)
     n, d = mu.shape
     dc, dmu = np.empty((3, n)), np.empty((3, n))
-    fn = _rhs_par if _parallel(n * n) else _rhs_ser
-    fn(_soa(c), _soa(mu), float(inv_s2), dc, dmu)
-    return _aos(dc, d), _aos(dmu, d)
+    fn = _rhs_par if use_parallel(n * n) else _rhs_ser
+    fn(to_soa(c), to_soa(mu), float(inv_s2), dc, dmu)
+    return from_soa(dc, d), from_soa(dmu, d)
 
 
 def hamiltonian_vjp(c, mu, cot_c, cot_mu, inv_s2):
     """Gradients ``(g_c, g_mu)`` of ``<cot_c, K mu> + <cot_mu, dmu>``."""
-    _check_dim(c, mu, cot_c, cot_mu)
+    check_dim(c, mu, cot_c, cot_mu)
     n, d = mu.shape
     g_c, g_mu = np.empty((3, n)), np.empty((3, n))
-    fn = _hvjp_par if _parallel(n * n) else _hvjp_ser
-    fn(_soa(c), _soa(mu), _soa(cot_c), _soa(cot_mu), float(inv_s2), g_c, g_mu)
-    return _aos(g_c, d), _aos(g_mu, d)
+    fn = _hvjp_par if use_parallel(n * n) else _hvjp_ser
+    fn(to_soa(c), to_soa(mu), to_soa(cot_c), to_soa(cot_mu), float(inv_s2), g_c, g_mu)
+    return from_soa(g_c, d), from_soa(g_mu, d)
 
 
 def convolve_vjp(x, c, mom, cot, inv_s2):
     """Gradients ``(g_x, g_c, g_mom)`` of ``sum_i cot_i . sum_j K(x_i, c_j) mom_j``."""
-    _check_dim(x, c, mom, cot)
+    check_dim(x, c, mom, cot)
     d = mom.shape[1]
-    par = _parallel(x.shape[0] * c.shape[0])
+    par = use_parallel(x.shape[0] * c.shape[0])
     # A fixed chunking (not the thread count) keeps the summation order, hence
     # the result, identical whatever the number of threads.
     n_chunks = max(1, min(CVJP_CHUNKS, x.shape[0]))
@@ -280,8 +289,8 @@ def convolve_vjp(x, c, mom, cot, inv_s2):
     buf_c = np.zeros((n_chunks, 3, c.shape[0]))
     buf_m = np.zeros((n_chunks, 3, c.shape[0]))
     fn = _cvjp_par if par else _cvjp_ser
-    fn(_soa(x), _soa(c), _soa(mom), _soa(cot), float(inv_s2), g_x, buf_c, buf_m)
-    return _aos(g_x, d), _aos(buf_c.sum(axis=0), d), _aos(buf_m.sum(axis=0), d)
+    fn(to_soa(x), to_soa(c), to_soa(mom), to_soa(cot), float(inv_s2), g_x, buf_c, buf_m)
+    return from_soa(g_x, d), from_soa(buf_c.sum(axis=0), d), from_soa(buf_m.sum(axis=0), d)
 
 
 @njit(cache=True, nogil=True)

@@ -14,12 +14,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .kernels_numba import _FLAGS, _aos, _check_dim, _gexp, _parallel, _soa
+from .kernels_numba import JIT_FLAGS, check_dim, from_soa, gexp, to_soa, use_parallel
 
 __all__ = ["convolve_jvp", "hamiltonian_jvp"]
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _cjvp_row(i, x, c, mom, dx, dc, dmom, inv_s2, out):  # pragma: no cover - compiled
     s = 2.0 * inv_s2
     x0, x1, x2 = x[0, i], x[1, i], x[2, i]
@@ -27,7 +27,7 @@ def _cjvp_row(i, x, c, mom, dx, dc, dmom, inv_s2, out):  # pragma: no cover - co
     v0 = v1 = v2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = x0 - c[0, j], x1 - c[1, j], x2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         de = d0 * (e0 - dc[0, j]) + d1 * (e1 - dc[1, j]) + d2 * (e2 - dc[2, j])
         w = s * k * de
         v0 += k * dmom[0, j] - w * mom[0, j]
@@ -36,7 +36,7 @@ def _cjvp_row(i, x, c, mom, dx, dc, dmom, inv_s2, out):  # pragma: no cover - co
     out[0, i], out[1, i], out[2, i] = v0, v1, v2
 
 
-@njit(inline="always", **_FLAGS)
+@njit(inline="always", **JIT_FLAGS)
 def _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - compiled
     s = 2.0 * inv_s2
     c0, c1, c2 = c[0, i], c[1, i], c[2, i]
@@ -47,7 +47,7 @@ def _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - c
     f0 = f1 = f2 = 0.0
     for j in range(c.shape[1]):
         d0, d1, d2 = c0 - c[0, j], c1 - c[1, j], c2 - c[2, j]
-        k = _gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
+        k = gexp(-(d0 * d0 + d1 * d1 + d2 * d2) * inv_s2)
         n0, n1, n2 = mu[0, j], mu[1, j], mu[2, j]
         e0, e1, e2 = a0 - dc[0, j], a1 - dc[1, j], a2 - dc[2, j]
         de = d0 * e0 + d1 * e1 + d2 * e2
@@ -66,25 +66,25 @@ def _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - c
     out_mu[0, i], out_mu[1, i], out_mu[2, i] = s * f0, s * f1, s * f2
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _cjvp_par(x, c, mom, dx, dc, dmom, inv_s2, out):  # pragma: no cover - compiled
     for i in prange(x.shape[1]):
         _cjvp_row(i, x, c, mom, dx, dc, dmom, inv_s2, out)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _cjvp_ser(x, c, mom, dx, dc, dmom, inv_s2, out):  # pragma: no cover - compiled
     for i in range(x.shape[1]):
         _cjvp_row(i, x, c, mom, dx, dc, dmom, inv_s2, out)
 
 
-@njit(parallel=True, **_FLAGS)
+@njit(parallel=True, **JIT_FLAGS)
 def _hjvp_par(c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - compiled
     for i in prange(c.shape[1]):
         _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu)
 
 
-@njit(**_FLAGS)
+@njit(**JIT_FLAGS)
 def _hjvp_ser(c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - compiled
     for i in range(c.shape[1]):
         _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu)
@@ -92,18 +92,18 @@ def _hjvp_ser(c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - comp
 
 def convolve_jvp(x, c, mom, dx, dc, dmom, inv_s2):
     """Tangent of ``v(x_i) = sum_j K(x_i, c_j) mom_j`` along ``(dx, dc, dmom)``."""
-    _check_dim(x, c, mom, dx, dc, dmom)
+    check_dim(x, c, mom, dx, dc, dmom)
     out = np.empty((3, x.shape[0]))
-    fn = _cjvp_par if _parallel(x.shape[0] * c.shape[0]) else _cjvp_ser
-    fn(_soa(x), _soa(c), _soa(mom), _soa(dx), _soa(dc), _soa(dmom), float(inv_s2), out)
-    return _aos(out, mom.shape[1])
+    fn = _cjvp_par if use_parallel(x.shape[0] * c.shape[0]) else _cjvp_ser
+    fn(to_soa(x), to_soa(c), to_soa(mom), to_soa(dx), to_soa(dc), to_soa(dmom), float(inv_s2), out)
+    return from_soa(out, mom.shape[1])
 
 
 def hamiltonian_jvp(c, mu, dc, dmu, inv_s2):
     """Tangent of the Hamiltonian right-hand side ``(K mu, dmu/dt)`` along ``(dc, dmu)``."""
-    _check_dim(c, mu, dc, dmu)
+    check_dim(c, mu, dc, dmu)
     n, d = mu.shape
     out_c, out_mu = np.empty((3, n)), np.empty((3, n))
-    fn = _hjvp_par if _parallel(n * n) else _hjvp_ser
-    fn(_soa(c), _soa(mu), _soa(dc), _soa(dmu), float(inv_s2), out_c, out_mu)
-    return _aos(out_c, d), _aos(out_mu, d)
+    fn = _hjvp_par if use_parallel(n * n) else _hjvp_ser
+    fn(to_soa(c), to_soa(mu), to_soa(dc), to_soa(dmu), float(inv_s2), out_c, out_mu)
+    return from_soa(out_c, d), from_soa(out_mu, d)

@@ -22,6 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..connection import Connection
+from ..data_terms import DataTerm
 from ..errors import ManifoldError
 from ..numerics.integrators import get_integrator
 from ..point_distance import point_distance
@@ -250,13 +251,30 @@ class KernelLandmarkSpace(Connection):
         return momenta
 
     # ------------------------------------------------------------ registration
-    def _key(self, template, target, initial_momenta, start=None) -> bytes:
+    def _key(self, template, target, initial_momenta, start=None) -> bytes | None:
+        """Cache key of a registration; None (not cached) for a data term without ``key()``."""
         h = hashlib.blake2b(digest_size=20)
+        if isinstance(target, DataTerm):
+            if not callable(getattr(target, "key", None)):
+                return None
+            target = np.frombuffer(f"{type(target).__name__}:{target.key()}".encode(), np.uint8)
         for arr in (template, target, initial_momenta, start):
             h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
         params = (type(self).__name__, self.point_shape, self.alpha, self.settings.key())
         h.update(repr(params).encode())
         return h.digest()
+
+    def _check_target(self, target, name: str):
+        """A target shape ``(k, d)``, or a :class:`~manifolds.data_terms.DataTerm` as given."""
+        if not isinstance(target, DataTerm):
+            return self.check_point(target, name)
+        n_points = getattr(target, "n_points", self.point_shape[0])
+        if n_points != self.point_shape[0]:
+            raise ManifoldError(
+                f"{self.name}: {name}: the data term reads {n_points} template points, "
+                f"the space has {self.point_shape[0]} landmarks"
+            )
+        return target
 
     def _warm_start(self, template, initial_momenta):
         """``(control points, initial momenta, start key)`` of a registration from ``template``."""
@@ -278,15 +296,20 @@ class KernelLandmarkSpace(Connection):
     def register(self, template, target, initial_momenta=None) -> RegistrationResult:
         """Register ``template`` onto ``target`` (eq. 3), cached per pair and parameters.
 
+        ``target`` is a shape ``(k, d)`` in correspondence or any
+        :class:`~manifolds.data_terms.DataTerm` (e.g. a
+        :class:`~manifolds.data_terms.VarifoldDistance` to a mesh with another
+        triangulation; cached when it has a ``key()``).
+
         ``initial_momenta`` (warm start) are momenta at the policy's control points,
         or, with ``optimize_control_points``, a :class:`LandmarkTangent` whose
         control points are the optimiser's start as well.
         """
         template = self.check_point(template, "template")
-        target = self.check_point(target, "target")
+        target = self._check_target(target, "target")
         cp, initial_momenta, start = self._warm_start(template, initial_momenta)
         key = self._key(template, target, initial_momenta, start)
-        if key in self._cache:
+        if key is not None and key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
         result = self._register(template, target, cp, initial_momenta)
@@ -298,7 +321,7 @@ class KernelLandmarkSpace(Connection):
         for arr in (result.momenta, result.residual, result.deformed, result.control_points):
             if arr is not None:
                 arr.setflags(write=False)
-        if self.cache_size > 0:
+        if self.cache_size > 0 and key is not None:
             self._cache[key] = result
             while len(self._cache) > self.cache_size:
                 self._cache.popitem(last=False)
@@ -312,12 +335,12 @@ class KernelLandmarkSpace(Connection):
     def log(self, point, other):
         """``Log_T(S)``: the registration momenta at ``c(T)``, shape ``(n_cp, d)``.
 
-        With ``optimize_control_points`` a :class:`LandmarkTangent` holding the
-        optimised control points and the momenta.
+        ``other`` is a shape or a :class:`~manifolds.data_terms.DataTerm` (see
+        :meth:`register`). With ``optimize_control_points`` a
+        :class:`LandmarkTangent` holding the optimised control points and the momenta.
         """
         point = self.check_point(point, "point")
-        other = self.check_point(other, "other")
-        res = self.register(point, other)
+        res = self.register(point, self._check_target(other, "other"))
         return self._tangent(res.control_points, res.momenta)
 
     def log_near(self, point, other, start):
@@ -334,7 +357,12 @@ class KernelLandmarkSpace(Connection):
     def log_with_residual(self, point, other):
         """``(Log_T(S), delta)`` with ``delta = S - Exp_T(Log_T S)`` (eq. 4), one registration."""
         point = self.check_point(point, "point")
-        other = self.check_point(other, "other")
+        other = self._check_target(other, "other")
+        if isinstance(other, DataTerm) and not other.corresponds:
+            raise ManifoldError(
+                f"{self.name}: other: the residual (eq. 4) needs a target in correspondence, "
+                f"got {type(other).__name__}"
+            )
         res = self.register(point, other)
         return self._tangent(res.control_points, res.momenta), res.residual.copy()
 

@@ -38,6 +38,8 @@ __all__ = [
     "assemble_cohort",
     "warn_unused",
     "write_cohort",
+    "scan_mesh_folder",
+    "natural_key",
 ]
 
 
@@ -45,11 +47,12 @@ class UnusedMeshFilesWarning(UserWarning):
     """Files with a mesh extension next to a cohort that the cohort does not use."""
 
 
-def _natural_key(name: str):
+def natural_key(name: str):
+    """Sort key of subject names with numbers in numeric order (``s2`` before ``s10``)."""
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name)]
 
 
-def _scan(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]], list[Path]]:
+def scan_mesh_folder(folder: Path) -> tuple[Path | None, dict[str, dict[str, Path]], list[Path]]:
     """Atlas, ``{subject: {phase: path}}`` and the files of formats not read."""
     atlas, subjects, other = None, {}, []
 
@@ -167,7 +170,7 @@ def read_cohort(folder, atlas=None) -> Cohort:
     folder = Path(folder)
     if not folder.is_dir():
         raise MeshFolderError(f"{folder}: not a folder")
-    found_atlas, entries, other = _scan(folder)
+    found_atlas, entries, other = scan_mesh_folder(folder)
     atlas_path = Path(atlas) if atlas is not None else found_atlas
     if atlas_path is None:
         raise MissingAtlasError(
@@ -191,7 +194,7 @@ def read_cohort(folder, atlas=None) -> Cohort:
     ):
         unused.append((found_atlas, f"the atlas given is {atlas_path}"))
     warn_unused(unused)
-    ordered = {name: entries[name] for name in sorted(entries, key=_natural_key)}
+    ordered = {name: entries[name] for name in sorted(entries, key=natural_key)}
     return assemble_cohort(atlas_path, ordered, source=str(folder))
 
 

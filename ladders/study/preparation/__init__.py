@@ -1,0 +1,72 @@
+"""From segmentations to a cohort in correspondence: units, alignment, correspondence, atlas.
+
+- :mod:`.units`: :func:`check_units_and_pose`, sizes and poses against the atlas's;
+- :mod:`.alignment`: :class:`SimilarityTransform`, :func:`procrustes` (with
+  correspondence) and :func:`icp_align` (without); :mod:`.affine`: the affine
+  pre-alignment of the atlas (:func:`affine_icp`);
+- :mod:`.correspondence`: :func:`correspond_mesh` and :func:`correspond_subject`,
+  the atlas registered onto a mesh of any triangulation with a varifold term;
+- :mod:`.cohort_correspondence`: :func:`correspond_cohort`, a folder of
+  segmentations into a folder the study reads, with a quality table
+  (:mod:`.quality_table`), failures recorded and resume;
+- :mod:`.atlas`: :func:`estimate_atlas`, the LDDMM atlas of end-diastolic meshes;
+- :mod:`.surface_distance`: Hausdorff and mean surface distances;
+- :mod:`.remeshing`: :func:`remesh`, another triangulation of a surface;
+  :mod:`.simulation`: :func:`simulate_segmentations` of a cohort (tests, tutorial).
+"""
+
+from .affine import affine_icp, apply_affine
+from .alignment import (
+    SimilarityTransform,
+    icp_align,
+    principal_frame,
+    procrustes,
+    random_rigid_transform,
+)
+from .atlas import AtlasResult, estimate_atlas
+from .cohort_correspondence import CohortCorrespondence, correspond_cohort, scan_segmentations
+from .correspondence import (
+    CorrespondenceSettings,
+    MeshCorrespondence,
+    SubjectCorrespondence,
+    correspond_mesh,
+    correspond_subject,
+)
+from .quality_table import quality_rows, write_quality_table
+from .remeshing import remesh
+from .simulation import procrustes_aligned, recovery_errors, simulate_segmentations
+from .surface_distance import distances_to_surface, surface_distances
+from .units import UNITS_IN_MM, MeshSize, UnitsError, UnitsReport, check_units_and_pose
+
+__all__ = [
+    "affine_icp",
+    "apply_affine",
+    "SimilarityTransform",
+    "procrustes",
+    "icp_align",
+    "principal_frame",
+    "random_rigid_transform",
+    "AtlasResult",
+    "estimate_atlas",
+    "CohortCorrespondence",
+    "correspond_cohort",
+    "scan_segmentations",
+    "CorrespondenceSettings",
+    "MeshCorrespondence",
+    "SubjectCorrespondence",
+    "correspond_mesh",
+    "correspond_subject",
+    "quality_rows",
+    "write_quality_table",
+    "remesh",
+    "simulate_segmentations",
+    "recovery_errors",
+    "procrustes_aligned",
+    "distances_to_surface",
+    "surface_distances",
+    "UNITS_IN_MM",
+    "MeshSize",
+    "UnitsError",
+    "UnitsReport",
+    "check_units_and_pose",
+]

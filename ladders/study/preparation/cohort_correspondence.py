@@ -1,0 +1,247 @@
+"""Correspond a folder of segmentations to an atlas, writing a folder the study reads.
+
+:func:`correspond_cohort` reads ``<name>_ed.<ext>`` / ``<name>_es.<ext>`` (or
+``<name>/ed.<ext>``, ``<name>/es.<ext>``) meshes of any vertex count, checks
+their units against the atlas (:func:`~ladders.study.preparation.units.check_units_and_pose`),
+corresponds every subject (:func:`~ladders.study.preparation.correspondence.correspond_subject`)
+and writes, in ``output``::
+
+    atlas.<ext>                     the atlas (so that ``symladders study --meshes output`` runs)
+    <name>_ed.<ext>, <name>_es.<ext> the corresponded meshes: the atlas's vertices and faces
+    quality.csv, quality.md         one row per mesh, flagged rows first (:mod:`.quality_table`)
+    correspondence/<name>.json      per subject: status, transform, units, quality, hashes
+
+A subject that fails is recorded with its reason (``"status": "failed"``) and
+the others finish. Every file is written atomically and a subject's record last,
+so an interrupted run loses nothing: the next run with the same atlas, settings
+and input files skips the subjects already done (failed ones are retried).
+The arguments are those a command line needs (atlas, meshes, output, jobs,
+progress, resume), so a command is a thin wrapper.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from joblib import Parallel, delayed
+
+from ..cohort.mesh_folder import natural_key, scan_mesh_folder
+from ..meshes.mesh_io import read_mesh, write_mesh
+from ..running.provenance import file_sha256
+from ..running.store import array_digest, atomic_write_text, validate_subject_name
+from .correspondence import CorrespondenceSettings, correspond_subject
+from .quality_table import write_quality_table
+from .units import check_units_and_pose
+
+__all__ = ["CohortCorrespondence", "correspond_cohort", "scan_segmentations"]
+
+RECORDS = "correspondence"
+
+
+@dataclass
+class CohortCorrespondence:
+    """Outcome of :func:`correspond_cohort`.
+
+    Attributes
+    ----------
+    output : Path
+    records : list of dict
+        One per subject (the content of ``correspondence/<name>.json``).
+    computed, reused, failed : list of str
+        Subject names.
+    units : dict
+        Per subject, the unit assumed for its input files.
+    """
+
+    output: Path
+    records: list = field(default_factory=list)
+    computed: list = field(default_factory=list)
+    reused: list = field(default_factory=list)
+    failed: list = field(default_factory=list)
+    units: dict = field(default_factory=dict)
+
+
+def scan_segmentations(folder) -> dict:
+    """``{subject: {"ed": path, "es": path}}`` of a folder in the study's layout, naturally sorted.
+
+    An ``atlas.<ext>`` in the folder is ignored here (the atlas is given separately).
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise FileNotFoundError(f"meshes: {folder} is not a folder")
+    _, entries, _ = scan_mesh_folder(folder)
+    if not entries:
+        raise ValueError(f"meshes: {folder} holds no '<name>_ed.<ext>' / '<name>_es.<ext>' files")
+    for name, slot in entries.items():
+        validate_subject_name(name)
+        missing = {"ed", "es"} - set(slot)
+        if missing:
+            raise ValueError(f"meshes: subject {name!r} has no {missing.pop().upper()} mesh")
+    return {n: entries[n] for n in sorted(entries, key=natural_key)}
+
+
+def _atomic_mesh(path: Path, vertices, faces) -> None:
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        write_mesh(tmp, vertices, faces)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _fingerprint(settings, atlas_hash, slot, factor) -> dict:
+    return {
+        "settings": settings.key(),
+        "atlas": atlas_hash,
+        "inputs": {p: file_sha256(slot[p]) for p in ("ed", "es")},
+        "unit_factor": factor,
+    }
+
+
+def _reusable(
+    record_path: Path, fingerprint: dict, output: Path, name: str, ext: str
+) -> dict | None:
+    try:
+        record = json.loads(record_path.read_text())
+    except (OSError, ValueError):
+        return None
+    done = record.get("status") == "ok" and record.get("fingerprint") == fingerprint
+    meshes = all((output / f"{name}_{p}{ext}").is_file() for p in ("ed", "es"))
+    return record if done and meshes else None
+
+
+def _run(tasks, records, outcome, jobs, progress, total):
+    """Report the reused subjects, then run ``tasks`` and report each as it finishes."""
+    if progress is not None:
+        for i, name in enumerate(outcome.reused):
+            progress(i + 1, total, name, records[name])
+    for record in Parallel(n_jobs=jobs, return_as="generator")(tasks):
+        outcome.computed.append(record["subject"])
+        if progress is not None:
+            progress(len(outcome.reused) + len(outcome.computed), total, record["subject"], record)
+        yield record
+
+
+def _subject(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -> dict:
+    """Correspond one subject; the record (status ok or failed) is written last."""
+    record = {"subject": name, "fingerprint": fingerprint, "unit_factor": factor}
+    try:
+        meshes = {}
+        for phase in ("ed", "es"):
+            v, f = read_mesh(slot[phase])
+            meshes[phase] = (v * factor, f)
+        out = correspond_subject(*atlas, meshes["ed"], meshes["es"], settings)
+        for phase, c in (("ed", out.ed), ("es", out.es)):
+            _atomic_mesh(output / f"{name}_{phase}{ext}", c.vertices, atlas[1])
+            record[phase] = {"input": str(slot[phase]), "n_input_vertices": len(meshes[phase][0]),
+                             **c.quality}  # fmt: skip
+        record.update(status="ok", transform=out.transform.as_dict())
+    except Exception as exc:  # a failing subject must not stop the others
+        record.update(status="failed", reason=f"{type(exc).__name__}: {exc}",
+                      traceback=traceback.format_exc())  # fmt: skip
+    atomic_write_text(output / RECORDS / f"{name}.json", json.dumps(record, indent=1))
+    return record
+
+
+def _readable(entries: dict) -> dict:
+    """The subjects' meshes that can be read (the others fail later, recorded with the reason)."""
+    out = {}
+    for name, slot in entries.items():
+        try:
+            out[name] = {p: read_mesh(slot[p]) for p in ("ed", "es")}
+        except (ValueError, OSError):
+            continue
+    return out
+
+
+def _read_atlas(atlas):
+    if isinstance(atlas, str | os.PathLike):
+        v, f = read_mesh(atlas)
+        return (v, f), Path(atlas).suffix.lower()
+    v, f = atlas
+    return (np.asarray(v, dtype=float), np.asarray(f, dtype=np.int64)), ".vtk"
+
+
+def correspond_cohort(
+    atlas,
+    meshes,
+    output,
+    settings: CorrespondenceSettings | None = None,
+    *,
+    jobs: int = 1,
+    progress: Callable | None = None,
+    resume: bool = True,
+    units=None,
+    allow_scale: bool = False,
+    atlas_unit: str = "mm",
+    ext: str | None = None,
+) -> CohortCorrespondence:
+    """Correspond every subject of a folder of segmentations to ``atlas`` (see the module).
+
+    Parameters
+    ----------
+    atlas : str, Path or tuple ``(vertices, faces)``
+    meshes : str, Path or dict
+        A folder in the study's layout, or ``{subject: {"ed": path, "es": path}}``.
+    output : str or Path
+        Created if needed; readable afterwards by ``read_cohort(output)``.
+    settings : CorrespondenceSettings, optional
+    jobs : int, default 1
+        Subjects corresponded in parallel (joblib processes).
+    progress : callable, optional
+        ``progress(done, total, subject, record)`` after each subject (reused ones included).
+    resume : bool, default True
+        Skip subjects already corresponded with the same atlas, settings, inputs and unit.
+    units, allow_scale, atlas_unit
+        As in :func:`~ladders.study.preparation.units.check_units_and_pose` (the
+        meshes' pose is not checked: they are aligned rigidly).
+    ext : str, optional
+        Extension of the written meshes (default the atlas file's, ``.vtk`` for arrays).
+
+    Returns
+    -------
+    CohortCorrespondence
+
+    Raises
+    ------
+    UnitsError
+        Meshes whose size disagrees with the atlas's, unless ``units`` or ``allow_scale``.
+    """
+    settings = settings or CorrespondenceSettings()
+    atlas_mesh, atlas_ext = _read_atlas(atlas)
+    ext = "." + (ext or atlas_ext).lower().lstrip(".")
+    entries = scan_segmentations(meshes) if not isinstance(meshes, dict) else dict(meshes)
+    report = check_units_and_pose(
+        *atlas_mesh, _readable(entries), atlas_unit=atlas_unit, units=units,
+        allow_scale=allow_scale, allow_pose=True,
+    )  # fmt: skip
+    output = Path(output)
+    (output / RECORDS).mkdir(parents=True, exist_ok=True)
+    _atomic_mesh(output / f"atlas{ext}", *atlas_mesh)
+    outcome = CohortCorrespondence(output, units=report.assumed_units)
+    atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
+    jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext)
+    factors = {n: report.factors.get(n, 1.0) for n in entries}
+    records, pending = {}, []
+    for name, slot in entries.items():
+        fp = _fingerprint(settings, atlas_hash, slot, factors[name])
+        done = _reusable(output / RECORDS / f"{name}.json", fp, output, name, ext)
+        if resume and done is not None:
+            records[name] = done
+            outcome.reused.append(name)
+        else:
+            pending.append(delayed(_subject)(name, slot, factor=factors[name], fingerprint=fp,
+                                             **jobs_args))  # fmt: skip
+    for record in _run(pending, records, outcome, jobs, progress, len(entries)):
+        records[record["subject"]] = record
+    outcome.records = [records[n] for n in entries]
+    outcome.failed = [r["subject"] for r in outcome.records if r["status"] != "ok"]
+    write_quality_table(outcome.records, output, settings, report.assumed_units)
+    return outcome
