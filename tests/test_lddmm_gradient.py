@@ -38,12 +38,10 @@ def ag_rhs(state):
     return [dc, dmu, anp.dot(ag_kernel(state[2], c), mu)]
 
 
-def ag_objective(mu, template, target, cp, scheme, dense):
-    """Objective of eq. (3) through the Runge-Kutta tableau, in autograd.numpy."""
-    state = [cp, mu] if dense else [cp, mu, template]
-    reg = anp.sum(mu * anp.dot(ag_kernel(cp, cp), mu))
-    h = 1.0 / N_STEPS
-    for _ in range(N_STEPS):
+def ag_shoot(state, scheme, n_steps=N_STEPS):
+    """The state ``[c, mu(, x)]`` shot through the Runge-Kutta tableau, in autograd.numpy."""
+    h = 1.0 / n_steps
+    for _ in range(n_steps):
         ks = []
         for s in range(len(scheme.b)):
             stage = list(state)
@@ -56,6 +54,13 @@ def ag_objective(mu, template, target, cp, scheme, dense):
             if b != 0.0:
                 new = [y + h * b * k for y, k in zip(new, ks[s])]
         state = new
+    return state
+
+
+def ag_objective(mu, template, target, cp, scheme, dense):
+    """Objective of eq. (3) through the Runge-Kutta tableau, in autograd.numpy."""
+    reg = anp.sum(mu * anp.dot(ag_kernel(cp, cp), mu))
+    state = ag_shoot([cp, mu] if dense else [cp, mu, template], scheme)
     deformed = state[0] if dense else state[2]
     return anp.sum((target - deformed) ** 2) + ALPHA**2 * reg
 

@@ -243,20 +243,24 @@ def _leaves(node):
     return np.atleast_1d(np.asarray(node, dtype=float)).ravel()
 
 
-def test_claim_a_holds_at_small_alpha_with_control_points_at_the_vertices(tmp_path):
+def test_claim_a_holds_at_every_alpha_with_control_points_at_the_vertices(tmp_path):
     """With dense control points (the registration is well posed) residuals lower the
-    midpoint distance, centrality and involutivity at alpha^2 = 0.01 as well as at 1,
-    for the mean over the subjects (the paper's claim; docs/study.md)."""
+    midpoint distance, centrality and involutivity at every alpha^2 of the paper's
+    sweep, for the mean over the subjects and for most subjects (the paper's claim (a);
+    docs/study.md)."""
+    from ladders.study.cli.study_arguments import FULL_ALPHA2
+
     cohort = make_synthetic_cohort(n_subjects=3, grid=(10, 6), seed=0)
     config = StudyConfig.build(
-        alpha2=(0.01, 1.0), control_points="dense", max_iter=2000, fanning_steps=3
+        alpha2=FULL_ALPHA2, sigma=20.0, control_points="dense", max_iter=3000, fanning_steps=3
     )
     out = run_study(
         config, cohort.atlas, cohort.faces, cohort.subjects, tmp_path, progress=False, meshes=False
     )
     assert all(r.non_converged_registrations == 0 for r in out.results)
-    for a in (0.01, 1.0):
+    for a in FULL_ALPHA2:
         for name in ("midpoint_distance", "centrality", "involutivity"):
-            with_res = np.mean([r.at(a).measure("residual", name) for r in out.results])
-            without = np.mean([r.at(a).measure("no_residual", name) for r in out.results])
-            assert with_res < without, (a, name, with_res, without)
+            with_res = np.array([r.at(a).measure("residual", name) for r in out.results])
+            without = np.array([r.at(a).measure("no_residual", name) for r in out.results])
+            assert with_res.mean() < without.mean(), (a, name, with_res, without)
+            assert np.sum(with_res < without) >= 2, (a, name, with_res, without)

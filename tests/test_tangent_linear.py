@@ -17,7 +17,7 @@ from manifolds.lddmm.hamiltonian_shooting import shoot, shooting_jvp, shooting_v
 from manifolds.lddmm.kernels import GaussianKernel, numba_available
 from manifolds.lddmm.stationary_flow import kernel_flow, kernel_flow_jvp, kernel_flow_vjp
 from manifolds.numerics.integrators import RK2, RK4, Euler
-from tests.test_lddmm_gradient import SIGMA, ag_rhs
+from tests.test_lddmm_gradient import SIGMA, ag_shoot
 from tests.test_svf_flow import ag_flow
 
 SCHEMES = [Euler, RK2, RK4]
@@ -70,26 +70,11 @@ def test_compiled_kernel_jvps_match_numpy():
         assert rel(a, b) < 1e-11
 
 
-def ag_shoot(flat, shapes, scheme):
-    """Final state ``(c, mu, x)`` flattened, through the Runge-Kutta tableau in autograd."""
-    sizes = [int(np.prod(s)) for s in shapes]
-    parts = [
-        anp.reshape(flat[sum(sizes[:i]) : sum(sizes[: i + 1])], s) for i, s in enumerate(shapes)
-    ]
-    state = list(parts)
-    h = 1.0 / N_STEPS
-    for _ in range(N_STEPS):
-        ks = []
-        for s in range(len(scheme.b)):
-            stage = list(state)
-            for r, a in enumerate(scheme.a[s]):
-                if a != 0.0:
-                    stage = [y + h * a * kk for y, kk in zip(stage, ks[r])]
-            ks.append(ag_rhs(stage))
-        for s, b in enumerate(scheme.b):
-            if b != 0.0:
-                state = [y + h * b * kk for y, kk in zip(state, ks[s])]
-    return anp.concatenate([anp.ravel(y) for y in state])
+def ag_final_state(flat, shapes, scheme):
+    """Final state ``(c, mu, x)`` of the initial state ``flat``, flattened, in autograd."""
+    sizes = np.cumsum([int(np.prod(s)) for s in shapes])[:-1]
+    parts = [anp.reshape(p, s) for p, s in zip(anp.split(flat, sizes), shapes)]
+    return anp.concatenate([anp.ravel(y) for y in ag_shoot(parts, scheme, N_STEPS)])
 
 
 @pytest.mark.parametrize("scheme", SCHEMES, ids=lambda s: s.name)
@@ -101,7 +86,7 @@ def test_shooting_jvp_matches_autograd_and_central_differences(scheme):
     flat = np.concatenate([c.ravel(), mu.ravel(), x.ravel()])
     direction = np.concatenate([dc.ravel(), dmu.ravel(), dx.ravel()])
     shapes = [c.shape, mu.shape, x.shape]
-    ag = jacobian(lambda f: ag_shoot(f, shapes, scheme))(flat) @ direction
+    ag = jacobian(lambda f: ag_final_state(f, shapes, scheme))(flat) @ direction
     assert rel(got, ag) <= 1e-10
 
     def final(f):

@@ -165,6 +165,16 @@ def shoot(
     )
 
 
+def _state_like(result: ShootingResult, c, mu, x) -> tuple:
+    """A (co)tangent ``(c, mu[, x])`` of the shot's state, zeros where None is given."""
+    parts = [(c, result.control_points), (mu, result.momenta)]
+    if result.points is not None:
+        parts.append((x, result.points))
+    return tuple(
+        np.zeros_like(ref) if v is None else np.asarray(v, dtype=float) for v, ref in parts
+    )
+
+
 def shooting_vjp(
     kernel: GaussianKernel,
     result: ShootingResult,
@@ -187,17 +197,7 @@ def shooting_vjp(
     if result.stages is None:
         raise ValueError("shooting_vjp: shoot must be called with keep_stages=True")
     _, rhs_vjp, _ = hamiltonian_system(kernel)
-    zeros = np.zeros_like(result.control_points)
-    cot = (
-        zeros if cot_control_points is None else np.asarray(cot_control_points, dtype=float),
-        zeros if cot_momenta is None else np.asarray(cot_momenta, dtype=float),
-    )
-    if result.points is not None:
-        cot += (
-            np.zeros_like(result.points)
-            if cot_points is None
-            else np.asarray(cot_points, dtype=float),
-        )
+    cot = _state_like(result, cot_control_points, cot_momenta, cot_points)
     h = 1.0 / result.n_steps
     grad = result.integrator.backward(rhs_vjp, result.stages, h, cot)
     return grad[0], grad[1], (grad[2] if len(grad) > 2 else None)
@@ -227,15 +227,7 @@ def shooting_jvp(
     if result.stages is None:
         raise ValueError("shooting_jvp: shoot must be called with keep_stages=True")
     _, _, rhs_jvp = hamiltonian_system(kernel)
-    zeros = np.zeros_like(result.control_points)
-    tan = (
-        zeros if d_control_points is None else np.asarray(d_control_points, dtype=float),
-        zeros if d_momenta is None else np.asarray(d_momenta, dtype=float),
-    )
-    if result.points is not None:
-        tan += (
-            np.zeros_like(result.points) if d_points is None else np.asarray(d_points, dtype=float),
-        )
+    tan = _state_like(result, d_control_points, d_momenta, d_points)
     h = 1.0 / result.n_steps
     out = result.integrator.forward(rhs_jvp, result.stages, h, tan)
     return out[0], out[1], (out[2] if len(out) > 2 else None)

@@ -109,6 +109,12 @@ class GaussianKernel:
     def _rows(self, n_cols: int) -> int:
         return max(1, self.block_size // max(n_cols, 1))
 
+    def _kernel_block(self, x_rows, c, x2_rows, c2):
+        """``K(x_rows, c)`` as a dense block (the numpy backend's unit of work)."""
+        kb = _sqdist(x_rows, c, x2_rows, c2)
+        kb *= -self.inv_s2
+        return np.exp(kb, out=kb)
+
     def _blocks(self, n_rows: int, n_cols: int):
         step = self._rows(n_cols)
         for start in range(0, n_rows, step):
@@ -158,9 +164,7 @@ class GaussianKernel:
         out = np.empty((x.shape[0], mom.shape[1]))
         x2, c2 = (x * x).sum(1), (c * c).sum(1)
         for rows in self._blocks(x.shape[0], c.shape[0]):
-            kb = _sqdist(x[rows], c, x2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(x[rows], c, x2[rows], c2)
             out[rows] = kb @ mom
         return out
 
@@ -177,9 +181,7 @@ class GaussianKernel:
         dmu = np.empty_like(mu)
         c2 = (c * c).sum(1)
         for rows in self._blocks(n, n):
-            kb = _sqdist(c[rows], c, c2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(c[rows], c, c2[rows], c2)
             dc[rows] = kb @ mu
             kb *= mu[rows] @ mu.T  # W = K o (mu mu^T)
             dmu[rows] = c[rows] * kb.sum(1)[:, None] - kb @ c
@@ -201,9 +203,7 @@ class GaussianKernel:
         w_col = np.zeros(c.shape[0])
         x2, c2 = (x * x).sum(1), (c * c).sum(1)
         for rows in self._blocks(x.shape[0], c.shape[0]):
-            kb = _sqdist(x[rows], c, x2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(x[rows], c, x2[rows], c2)
             g_mom += kb.T @ cot[rows]
             kb *= cot[rows] @ mom.T  # W_ij = K_ij (cot_i . mom_j)
             g_x[rows] = x[rows] * kb.sum(1)[:, None] - kb @ c
@@ -235,9 +235,7 @@ class GaussianKernel:
         bc = (cot_mu * c).sum(1)
         for rows in self._blocks(n, n):
             cr, mr, ar, br = c[rows], mu[rows], cot_c[rows], cot_mu[rows]
-            kb = _sqdist(cr, c, c2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(cr, c, c2[rows], c2)
             bmat = bc[rows][:, None] + bc[None, :] - br @ c.T - cr @ cot_mu.T
             kbm = kb * bmat
             g_mu[rows] = kb @ cot_c + s * (kbm @ mu)
@@ -264,9 +262,7 @@ class GaussianKernel:
         x2, c2 = (x * x).sum(1), (c * c).sum(1)
         dxc = (dc * c).sum(1)
         for rows in self._blocks(x.shape[0], c.shape[0]):
-            kb = _sqdist(x[rows], c, x2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(x[rows], c, x2[rows], c2)
             # (x_i - c_j) . (dx_i - dc_j) = x_i.dx_i - x_i.dc_j - c_j.dx_i + c_j.dc_j
             xr, dxr = x[rows], dx[rows]
             de = (xr * dxr).sum(1)[:, None] - xr @ dc.T - dxr @ c.T + dxc[None, :]
@@ -293,9 +289,7 @@ class GaussianKernel:
         cdc = (c * dc).sum(1)
         for rows in self._blocks(n, n):
             cr, dcr, mr, dmr = c[rows], dc[rows], mu[rows], dmu[rows]
-            kb = _sqdist(cr, c, c2[rows], c2)
-            kb *= -self.inv_s2
-            np.exp(kb, out=kb)
+            kb = self._kernel_block(cr, c, c2[rows], c2)
             de = cdc[rows][:, None] - cr @ dc.T - dcr @ c.T + cdc[None, :]
             dk = -s * kb * de
             out_c[rows] = kb @ dmu + dk @ mu
