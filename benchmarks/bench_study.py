@@ -8,8 +8,12 @@ mean optimiser iterations per registration, the fraction that met the
 optimiser's tolerance and the targets (default <= 5 min, full <= 30 min on 2
 cores). ``--deformation both`` runs the LDDMM and the SVF studies (targets doubled).
 
+``--keep DIR`` writes the study into ``DIR`` (kept, with its tables and figures)
+instead of a temporary folder; the folder must not hold results of the same
+settings, or they would be reused.
+
 Usage: ``python benchmarks/bench_study.py [--full] [--deformation lddmm|svf|both]
-[--kernel-backend numpy|numba|auto] [-- extra study flags]``.
+[--kernel-backend numpy|numba|auto] [--keep DIR] [-- extra study flags]``.
 """
 
 from __future__ import annotations
@@ -32,8 +36,9 @@ def _manifests(folder: Path) -> list[dict]:
     return [json.loads(p.read_text()) for p in paths]
 
 
-def run(setting: str, backend: str, jobs: int, deformation: str, extra: list) -> dict:
-    with tempfile.TemporaryDirectory() as tmp:
+def run(setting, backend, jobs, deformation, extra, keep=None) -> dict:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = str(keep / setting) if keep is not None else scratch
         args = [
             sys.executable,
             "-m",
@@ -63,6 +68,7 @@ def run(setting: str, backend: str, jobs: int, deformation: str, extra: list) ->
         "registrations": total("registrations"),
         "non_converged": total("non_converged_registrations"),
         "iterations": total("optimiser_iterations"),
+        "flow_passes": total("flow_evaluations"),
         "peak_rss_mb": peak_mb,
     }
 
@@ -73,19 +79,21 @@ def main(argv=None) -> int:
     parser.add_argument("--kernel-backend", default="auto", choices=("auto", "numpy", "numba"))
     parser.add_argument("--jobs", type=int, default=-1)
     parser.add_argument("--deformation", default="lddmm", choices=("lddmm", "svf", "both"))
+    parser.add_argument("--keep", type=Path, default=None, help="keep the study in this folder")
     parser.add_argument("extra", nargs="*", help="further flags of symladders study (after --)")
     args = parser.parse_args(argv)
     settings = ["default", "full"] if args.full else ["default"]
     print(f"kernel backend: {args.kernel_backend}, jobs: {args.jobs}, {args.deformation}")
     for setting in settings:
-        r = run(setting, args.kernel_backend, args.jobs, args.deformation, args.extra)
+        r = run(setting, args.kernel_backend, args.jobs, args.deformation, args.extra, args.keep)
         target = TARGETS_S[setting] * (2 if args.deformation == "both" else 1)
         met = "met" if r["seconds"] <= target else "NOT met"
         print(
             f"{setting:8s} {r['subjects']:4d} subjects x {len(r['alpha2'])} alpha^2: "
             f"{r['seconds']:8.1f} s wall ({r['seconds'] / r['subjects']:.2f} s/subject), "
             f"{r['registrations']} registrations, "
-            f"{r['iterations'] / max(r['registrations'], 1):.0f} iterations each on average, "
+            f"{r['iterations'] / max(r['registrations'], 1):.0f} iterations and "
+            f"{r['flow_passes'] / max(r['registrations'], 1):.0f} flow passes each on average, "
             f"{1 - r['non_converged'] / max(r['registrations'], 1):.1%} converged; "
             f"peak RSS {r['peak_rss_mb']:.0f} MB; target <= {target / 60:.0f} min: {met}"
         )
