@@ -139,7 +139,7 @@ def test_convergence_paragraph_counts_registrations_and_the_largest_gradient():
     assert "Registrations: 39; 36 (92.31%) converged, 3 stopped before" in text
     assert "20 iterations on average" in text
     ruled = convergence_markdown(results, "the shape moved by at most 1e-4")
-    assert "converged (converged: the shape moved by at most 1e-4)" in ruled
+    assert "converged (the stopping rule: the shape moved by at most 1e-4)" in ruled
     assert "(40 flow passes)" in text
     assert "largest final gradient 5e-07" in text
 

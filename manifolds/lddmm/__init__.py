@@ -30,6 +30,7 @@ from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_j
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import RegistrationResult, register, registration_objective
+from .registration_cache import RegistrationCache
 from .registration_problem import RegistrationProblem
 from .settings import RegistrationSettings
 from .space import LDDMMLandmarks
@@ -63,6 +64,7 @@ __all__ = [
     "RegistrationResult",
     "RegistrationSettings",
     "RegistrationProblem",
+    "RegistrationCache",
     "register",
     "registration_objective",
     "ShootingResult",

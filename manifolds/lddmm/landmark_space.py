@@ -14,9 +14,7 @@ points) and ``_register`` (the optimisation of eq. 3 for that model).
 
 from __future__ import annotations
 
-import hashlib
 from abc import abstractmethod
-from collections import OrderedDict
 from collections.abc import Callable
 
 import numpy as np
@@ -25,10 +23,11 @@ from ..connection import Connection
 from ..data_terms import DataTerm
 from ..errors import ManifoldError
 from ..numerics.integrators import get_integrator
-from ..point_distance import point_distance
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
 from .control_points import resolve_control_points
+from .inverse_consistency import inverse_consistency
 from .registration import RegistrationResult
+from .registration_cache import RegistrationCache, registration_key
 from .settings import RegistrationSettings
 from .shapes import random_shape
 from .tangent import LandmarkTangent
@@ -120,7 +119,7 @@ class KernelLandmarkSpace(Connection):
         self.kernel = settings.make_kernel(block_size)
         self.integrator = get_integrator(settings.integrator)
         self.cache_size = check_int(cache_size, f"{name}: cache_size", minimum=0)
-        self._cache: OrderedDict = OrderedDict()
+        self._cache = RegistrationCache(self.cache_size)
         self.n_registrations = 0
         self.n_unconverged = 0
         self.n_iterations = 0
@@ -251,19 +250,6 @@ class KernelLandmarkSpace(Connection):
         return momenta
 
     # ------------------------------------------------------------ registration
-    def _key(self, template, target, initial_momenta, start=None) -> bytes | None:
-        """Cache key of a registration; None (not cached) for a data term without ``key()``."""
-        h = hashlib.blake2b(digest_size=20)
-        if isinstance(target, DataTerm):
-            if not callable(getattr(target, "key", None)):
-                return None
-            target = np.frombuffer(f"{type(target).__name__}:{target.key()}".encode(), np.uint8)
-        for arr in (template, target, initial_momenta, start):
-            h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
-        params = (type(self).__name__, self.point_shape, self.alpha, self.settings.key())
-        h.update(repr(params).encode())
-        return h.digest()
-
     def _check_target(self, target, name: str):
         """A target shape ``(k, d)``, or a :class:`~manifolds.data_terms.DataTerm` as given."""
         if not isinstance(target, DataTerm):
@@ -308,23 +294,18 @@ class KernelLandmarkSpace(Connection):
         template = self.check_point(template, "template")
         target = self._check_target(target, "target")
         cp, initial_momenta, start = self._warm_start(template, initial_momenta)
-        key = self._key(template, target, initial_momenta, start)
-        if key is not None and key in self._cache:
-            self._cache.move_to_end(key)
-            return self._cache[key]
+        params = (type(self).__name__, self.point_shape, self.alpha, self.settings.key())
+        key = registration_key(params, template, target, initial_momenta, start)
+        cached = self._cache.get(key)
+        if cached is not None:
+            return cached
         result = self._register(template, target, cp, initial_momenta)
         self.n_registrations += 1
         self.n_unconverged += not result.converged
         self.n_iterations += result.n_iter
         self.n_flow_evaluations += result.n_flow_evaluations
         self.max_gradient_norm = max(self.max_gradient_norm, result.gradient_norm)
-        for arr in (result.momenta, result.residual, result.deformed, result.control_points):
-            if arr is not None:
-                arr.setflags(write=False)
-        if self.cache_size > 0 and key is not None:
-            self._cache[key] = result
-            while len(self._cache) > self.cache_size:
-                self._cache.popitem(last=False)
+        self._cache.put(key, result)
         return result
 
     def clear_cache(self) -> None:
@@ -367,35 +348,9 @@ class KernelLandmarkSpace(Connection):
         return self._tangent(res.control_points, res.momenta), res.residual.copy()
 
     def inverse_consistency(self, template, shape, distance: str | Callable = "rms") -> float:
-        """Inverse consistency error of the registrations between ``template`` and ``shape``.
-
-        With ``phi_TS`` the deformation registering ``T`` onto ``S`` and ``phi_ST``
-        the one registering ``S`` onto ``T`` (each from its own template's
-        control points), returns ``d(phi_ST(phi_TS(T)), T)``, how far the
-        composition is from the identity on ``T`` (paper, Table 1). It is zero
-        when ``phi_ST = phi_TS^{-1}`` on ``T``.
-
-        Parameters
-        ----------
-        template, shape : arrays, shape ``(k, d)``
-        distance : {"rms", "frobenius", "mean"} or callable, default "rms"
-            Per-vertex RMS distance ``||A - B||_F / sqrt(k)`` (the paper's unit),
-            Frobenius norm, mean per-vertex distance, or ``(a, b) -> float``
-            (:func:`manifolds.point_distance.point_distance`).
-
-        Returns
-        -------
-        float
-        """
-        template = self.check_point(template, "template")
-        shape = self.check_point(shape, "shape")
-        dist = point_distance(distance, self.point_shape)
-        forward = self.register(template, shape)
-        backward = self.register(shape, template)
-        back = self.flow(
-            shape, backward.momenta, forward.deformed, control_points=backward.control_points
-        )
-        return float(dist(back, template))
+        """Inverse consistency error of the registrations between ``template`` and ``shape``
+        (paper, Table 1): :func:`manifolds.lddmm.inverse_consistency.inverse_consistency`."""
+        return inverse_consistency(self, template, shape, distance)
 
     def is_tangent(self, point, vector, atol: float | None = None):
         """Whether ``vector`` is finite momenta ``(n_cp, d)`` at the policy's control

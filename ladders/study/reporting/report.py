@@ -88,7 +88,7 @@ def convergence_markdown(results: list, stopping: str | None = None) -> str:
     n, bad = c.n_registrations, c.non_converged
     if n == 0:
         return "No registration.\n"
-    rule = f" (converged: {stopping})" if stopping else ""
+    rule = f" (the stopping rule: {stopping})" if stopping else ""
     return (
         f"Registrations: {n}; {n - bad} ({(n - bad) / n:.2%}) converged{rule}, "
         f"{bad} stopped before; {c.n_iterations / n:.0f} iterations on average "
