@@ -87,7 +87,8 @@ def scan_segmentations(folder, phases=("ed", "es")) -> dict:
         raise FileNotFoundError(f"meshes: {folder} is not a folder")
     _, entries, _ = scan_mesh_folder(folder)
     if not entries:
-        raise ValueError(f"meshes: {folder} holds no '<name>_ed.<ext>' / '<name>_es.<ext>' files")
+        names = " / ".join(f"'<name>_{p}.<ext>'" for p in phases)
+        raise ValueError(f"meshes: {folder} holds no {names} files")
     for name, slot in entries.items():
         validate_subject_name(name)
         missing = set(phases) - set(slot)
