@@ -45,6 +45,41 @@ def cli_cases():
         ("study --backend dask --scheduler tcp://127.0.0.1:1", "--scheduler"),
         ("study --backend dask --scheduler not-an-address", "--scheduler"),
         ("study --bogus", "--bogus"),
+        ("study --units m", "--units"),
+        ("study --allow-scale", "--allow-scale"),
+        ("study --allow-pose", "--allow-pose"),
+        ("study --units inch", "--units"),
+        ("correspond", "--atlas"),
+        ("correspond --atlas {mesh}", "--meshes"),
+        ("correspond --atlas {tmp}/missing.vtk --meshes {empty}", "--atlas"),
+        ("correspond --atlas {file} --meshes {empty}", "--atlas"),
+        ("correspond --atlas {empty} --meshes {empty}", "--atlas"),
+        ("correspond --atlas {badmesh} --meshes {empty} -o {tmp}/o", "--atlas"),
+        ("correspond --atlas {mesh} --meshes {tmp}/missing", "--meshes"),
+        ("correspond --atlas {mesh} --meshes {empty} -o {tmp}/o", "--meshes"),
+        ("correspond --atlas {mesh} --meshes {noes} -o {tmp}/o", "--meshes"),
+        ("correspond --atlas {mesh} --meshes {empty} -o {file}", "--output"),
+        ("correspond --atlas {mesh} --meshes {empty} --jobs 0", "--jobs"),
+        ("correspond --atlas {mesh} --meshes {empty} --units inch", "--units"),
+        ("correspond --atlas {mesh} --meshes {empty} --sigma-w 0", "--sigma-w"),
+        ("correspond --atlas {mesh} --meshes {empty} --weight abc", "--weight"),
+        ("correspond --atlas {mesh} --meshes {empty} --weight -1", "--weight"),
+        ("correspond --atlas {mesh} --meshes {empty} --ext vtp", "--ext"),
+        ("correspond --atlas {mesh} --meshes {empty} --alignment affine", "--alignment"),
+        ("correspond --atlas {mesh} --meshes {empty} --no-resum", "--no-resum"),
+        ("atlas", "--meshes"),
+        ("atlas --meshes {tmp}/missing", "--meshes"),
+        ("atlas --meshes {empty} -o {tmp}/a.vtk", "--meshes"),
+        ("atlas --meshes {noes} -o {tmp}/atlas.txt", "--output"),
+        ("atlas --meshes {noes} -o {file}/a.vtk", "--output"),
+        ("atlas --meshes {noes} -o {empty}", "--output"),
+        ("atlas --meshes {noes} -o {tmp}/a.vtp", "--output"),
+        ("atlas --meshes {noes} --tol 0", "--tol"),
+        ("atlas --meshes {noes} --max-iter 0", "--max-iter"),
+        ("atlas --meshes {noes} --term bogus", "--term"),
+        ("atlas --meshes {noes} --units m3", "--units"),
+        ("atlas --meshes {noes} -o {tmp}/a.vtk --start nobody", "--start"),
+        ("atlas --meshes {noes} -o {tmp}/a.vtk --start mean --term varifold", "--start"),
         ("validate --seed -1", "--seed"),
         ("validate --seed abc", "--seed"),
         ("validate -o {file}", "--output"),
@@ -58,9 +93,24 @@ def cli_cases():
 
 @pytest.fixture
 def paths(tmp_path):
+    """A file, an atlas, an unreadable mesh, an empty folder and one whose subjects have ED
+    meshes only (in correspondence? no: the second is remeshed)."""
+    from ladders.study import write_mesh
+    from ladders.study.cohort import make_synthetic_cohort
+    from ladders.study.preparation import remesh
+
     file = tmp_path / "a_file.txt"
     file.write_text("not a folder")
-    return {"file": str(file), "tmp": str(tmp_path)}
+    c = make_synthetic_cohort(2, grid=(8, 5), seed=0)
+    write_mesh(tmp_path / "atlas.vtk", c.atlas, c.faces)
+    (tmp_path / "bad.vtk").write_text("# vtk DataFile but not really")
+    for folder in ("empty", "noes"):
+        (tmp_path / folder).mkdir()
+    write_mesh(tmp_path / "noes" / "s1_ed.vtk", c.subjects[0].ed, c.faces)
+    write_mesh(tmp_path / "noes" / "s2_ed.vtk", *remesh(c.subjects[1].ed, c.faces, 80))
+    folders = {k: str(tmp_path / k) for k in ("empty", "noes")}
+    return {"file": str(file), "tmp": str(tmp_path), "mesh": str(tmp_path / "atlas.vtk"),
+            "badmesh": str(tmp_path / "bad.vtk"), **folders}  # fmt: skip
 
 
 def one_line_error(err: str) -> str:

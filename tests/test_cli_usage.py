@@ -37,14 +37,18 @@ def test_a_missing_atlas_is_named_by_the_flag_on_the_command_line(tmp_path, caps
     assert err.strip().endswith("name one with --atlas PATH") and "atlas=PATH" not in err
 
 
-@pytest.mark.parametrize(("typed", "meant"), [("stduy", "study"), ("valdate", "validate")])
+@pytest.mark.parametrize(
+    ("typed", "meant"),
+    [("stduy", "study"), ("valdate", "validate"), ("corespond", "correspond"), ("atlsa", "atlas")],
+)
 def test_a_mistyped_subcommand_is_answered_with_the_closest(typed, meant, capsys):
     assert main([typed]) == 2
     err = capsys.readouterr().err
     assert f"unknown command '{typed}'; did you mean '{meant}'?" in err
     assert f"symladders {meant} --help" in err and "usage" not in err
     assert main(["xyz"]) == 2
-    assert "unknown command 'xyz', choose from study, validate" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown command 'xyz', choose from study, correspond, atlas, validate" in err
 
 
 def test_options_are_not_abbreviated(tmp_path, capsys):
@@ -64,6 +68,24 @@ def test_help_texts_show_each_default_once(capsys):
     _help("validate")
     text = " ".join(capsys.readouterr().out.split())
     assert "(default: symladders-output/validation)" in text and "(default: 0)" in text
+
+
+@pytest.mark.parametrize("command", ["correspond", "atlas"])
+def test_the_preparation_commands_show_each_default_once_and_help_every_flag(command, capsys):
+    from ladders.study.preparation import CorrespondenceSettings
+
+    _help(command)
+    text = " ".join(capsys.readouterr().out.split())
+    assert "default: None" not in text and "default: False" not in text
+    assert f"(default: {CorrespondenceSettings().sigma_w})" in text  # the library's
+    assert "(default: landmarks)" in text
+    parser = next(a for a in build_parser()._actions if a.dest == "command").choices[command]
+    for action in parser._actions:
+        assert action.help, action.option_strings  # every flag is explained
+    for flag in ("--start", "--ext"):  # defaults given in words
+        help_ = next((a.help for a in parser._actions if flag in a.option_strings), None)
+        if help_ is not None:
+            assert help_.count("default") == 1
 
 
 def test_the_vertices_default_is_the_count_the_built_in_meshes_have():

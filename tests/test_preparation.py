@@ -16,12 +16,15 @@ from ladders.study.preparation import (
     correspond_mesh,
     estimate_atlas,
     icp_align,
+    meshes_correspond,
     procrustes,
     random_rigid_transform,
     remesh,
     surface_distances,
 )
 from manifolds.lddmm import RegistrationSettings
+
+from .vtp_writer import vtp_bytes
 
 FAST = CorrespondenceSettings(
     registration=RegistrationSettings(sigma=20.0, control_points="grid", max_iter=100, ftol=1e-8),
@@ -181,6 +184,30 @@ def test_correspond_cohort_resumes(segmentations):
     assert again.reused == []
 
 
+def test_any_atlas_format_and_a_failure_leaves_no_earlier_meshes(cohort, tmp_path):
+    s = cohort.subjects[0]
+    (tmp_path / "seg").mkdir()
+    for phase, v in (("ed", s.ed), ("es", s.es)):
+        write_mesh(tmp_path / "seg" / f"{s.name}_{phase}.obj", *remesh(v, cohort.faces, 400))
+    (tmp_path / "atlas.vtp").write_bytes(vtp_bytes(cohort.atlas, cohort.faces, points_type="f8"))
+    out = correspond_cohort(tmp_path / "atlas.vtp", tmp_path / "seg", tmp_path / "out", FAST)
+    assert out.failed == [] and out.flagged == []  # .vtp is read, not written: .vtk instead
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.vtk")) == [
+        "atlas.vtk", f"{s.name}_ed.vtk", f"{s.name}_es.vtk"
+    ]  # fmt: skip
+    (tmp_path / "seg" / f"{s.name}_ed.obj").write_text("not a mesh")  # the input changes
+    again = correspond_cohort(tmp_path / "atlas.vtp", tmp_path / "seg", tmp_path / "out", FAST)
+    assert again.failed == [s.name] and again.flagged == [f"{s.name} ed", f"{s.name} es"]
+    assert not list((tmp_path / "out").glob(f"{s.name}_*"))  # the study cannot read stale ones
+
+
+def test_without_alignment_the_pose_is_checked(cohort, segmentations, tmp_path):
+    root, _ = segmentations
+    settings = FAST.replace(alignment="none")
+    with pytest.raises(UnitsError, match="far from the atlas's pose"):
+        correspond_cohort(root / "atlas.vtk", root / "seg", tmp_path, settings, units="auto")
+
+
 # ------------------------------------------------------------------ atlas
 def test_atlas_of_corresponding_meshes_is_their_karcher_mean(cohort):
     meshes = [(s.ed, cohort.faces) for s in cohort.subjects]
@@ -211,6 +238,19 @@ def test_atlas_of_remeshed_meshes_approaches_the_generating_template(cohort):
         for s in cohort.subjects
     ])  # fmt: skip
     assert mean_atlas < mean_start
+
+
+@pytest.mark.filterwarnings("ignore::manifolds.errors.ConvergenceWarning")
+def test_atlas_surface_term_on_request_and_its_iterates(cohort):
+    meshes = [(s.ed, cohort.faces) for s in cohort.subjects]
+    seen = []
+    res = estimate_atlas(meshes, FAST, max_iter=1, surface_term=True,
+                         checkpoint=lambda it, v: seen.append((it, v.shape)))  # fmt: skip
+    assert not res.corresponding and seen == [(0, cohort.atlas.shape), (1, cohort.atlas.shape)]
+    v, f = remesh(cohort.subjects[0].ed, cohort.faces, 300)
+    with pytest.raises(ValueError, match="surface_term: False needs meshes"):
+        estimate_atlas([*meshes, (v, f)], surface_term=False)
+    assert meshes_correspond(meshes) and not meshes_correspond([*meshes, (v, f)])
 
 
 def test_atlas_bad_input():

@@ -1,4 +1,8 @@
-"""The ``symladders`` command: its parser and entry point (subcommands ``study`` and ``validate``)."""
+"""The ``symladders`` command: its parser and entry point.
+
+Subcommands: ``study``, ``correspond`` and ``atlas`` (a user's segmentations to
+a cohort in correspondence and its atlas), ``validate``.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,9 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
+from .atlas_cli import add_atlas_parser
 from .cli_types import (
     EXIT_BROKEN_PIPE,
     EXIT_INTERNAL,
@@ -16,6 +22,7 @@ from .cli_types import (
     UsageError,
     log_internal_error,
 )
+from .correspond_cli import add_correspond_parser
 from .study_cli import add_study_parser
 from .validate_cli import add_validate_parser
 
@@ -23,13 +30,15 @@ __all__ = ["main", "build_parser"]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The parser of ``symladders`` with its subcommands ``study`` and ``validate``."""
+    """The parser of ``symladders`` with its subcommands."""
     parser = OneLineParser(
         prog="symladders",
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
     add_study_parser(sub)
+    add_correspond_parser(sub)
+    add_atlas_parser(sub)
     add_validate_parser(sub)
     return parser
 
@@ -62,18 +71,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)
     except KeyboardInterrupt:
-        return _fail(f"{command}: interrupted", EXIT_INTERRUPTED)
+        hint = getattr(args, "on_interrupt", None)
+        return _fail(f"{command}: interrupted{'; ' + hint if hint else ''}", EXIT_INTERRUPTED)
     except SystemExit as exc:
         if exc.code is None or isinstance(exc.code, int):
             raise
         return _fail(str(exc.code), EXIT_USAGE)
     except Exception as exc:  # noqa: BLE001 - the last resort of the entry point
-        log = log_internal_error(exc, getattr(args, "output", None))
+        log = log_internal_error(exc, _log_folder(args))
         return _fail(
             f"{command}: internal error ({type(exc).__name__}: {_first_line(exc)}); "
             f"full traceback in {log}",
             EXIT_INTERNAL,
         )
+
+
+def _log_folder(args) -> str | None:
+    """The output folder, where the traceback of an internal error is written (the folder
+    of the output file for a command that writes one file)."""
+    output = getattr(args, "output", None)
+    if output is not None and getattr(args, "output_is_file", False):
+        return str(Path(output).parent)
+    return None if output is None else str(output)
 
 
 def _closed_pipe() -> int:

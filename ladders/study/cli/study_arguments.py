@@ -16,6 +16,7 @@ from .cli_types import (
     positive_int,
     scheduler_address,
 )
+from .preparation_arguments import add_units_arguments
 
 __all__ = [
     "add_study_arguments",
@@ -47,6 +48,13 @@ def _floats(text: str) -> tuple[float, ...]:
 def add_study_arguments(p) -> None:
     """Add the flags of ``symladders study`` to the parser ``p``."""
     _add_input_arguments(p)
+    add_units_arguments(  # the built-in cohort is in mm
+        p,
+        reference="the atlas's (taken to be in mm)",
+        note=" (with --meshes or --cohort; the built-in cohort is in mm)",
+        pose="accept subjects far from the atlas's pose (the study does not align them; "
+        "symladders correspond does)",
+    )
     _add_model_arguments(p)
     _add_run_arguments(p)
 

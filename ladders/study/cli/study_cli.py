@@ -42,6 +42,32 @@ def add_study_parser(sub) -> None:
     p.set_defaults(run=run_study_command)
 
 
+def _check_units(args, cohort, description: dict):
+    """The units check of a cohort read from files (before any registration); the cohort in
+    mm and the sentence ``summary.md`` states. The built-in cohort is in mm."""
+    from ..preparation import UnitsError, check_cohort_units
+
+    flags = [f for f, on in (("--units", args.units), ("--allow-scale", args.allow_scale),
+                             ("--allow-pose", args.allow_pose)) if on]  # fmt: skip
+    if description["source"] == "synthetic":
+        if flags:
+            raise UsageError(
+                f"symladders study: error: {flags[0]} needs --meshes FOLDER or --cohort TABLE "
+                "(the built-in cohort is in mm)"
+            )
+        description["units"] = {"unit": "mm", "how": "built-in"}
+        return cohort, "Lengths in mm, the built-in synthetic cohort's unit."
+    try:
+        cohort, report = check_cohort_units(
+            cohort, units=args.units, allow_scale=args.allow_scale, allow_pose=args.allow_pose
+        )
+    except UnitsError as exc:
+        where = "--meshes" if args.meshes is not None else "--cohort"
+        raise UsageError(f"symladders study: error: {where}: {exc.for_command_line()}") from None
+    description["units"] = report.as_dict()
+    return cohort, report.describe()
+
+
 def _load_cohort(args):
     from ..cohort import (
         MissingAtlasError,
@@ -156,7 +182,7 @@ def _config(args, deformation: str):
     )
 
 
-def _run_one(args, cohort, description, config, output: Path):
+def _run_one(args, cohort, description, config, output: Path, units: str):
     """Run (or resume) one study into ``output``, write its report, print its summary."""
     from ..reporting import summarize, terminal_summary, write_report
     from ..running import RegistrationCounts, run_study
@@ -166,6 +192,7 @@ def _run_one(args, cohort, description, config, output: Path):
         f"{config.deformation}, alpha^2 = {', '.join(f'{a:g}' for a in config.alpha2)}, "
         f"output {output}"
     )
+    print(units)
     with _backend(args):
         outcome = run_study(
             config,
@@ -189,8 +216,9 @@ def _run_one(args, cohort, description, config, output: Path):
 
     rule = StoppingRule.from_settings(config.registration)
     paths = write_report(
-        outcome.results, output, cohort.atlas, cohort.faces, shapes, stopping=rule.describe()
-    )
+        outcome.results, output, cohort.atlas, cohort.faces, shapes, stopping=rule.describe(),
+        units=units,
+    )  # fmt: skip
     pairs = [p for r in outcome.results for p in r.pairs]
     if pairs:
         print()
@@ -245,6 +273,7 @@ def run_study_command(args) -> int:
     """
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
+    cohort, units = _check_units(args, cohort, description)
     output = Path(args.output)
     models = ("lddmm", "svf") if args.deformation == "both" else (args.deformation,)
     if args.optimize_control_points and "svf" in models:
@@ -257,7 +286,7 @@ def run_study_command(args) -> int:
     outcomes = {}
     for model, config in configs.items():
         folder = output / model if len(models) > 1 else output
-        outcomes[model] = _run_one(args, cohort, description, config, folder)
+        outcomes[model] = _run_one(args, cohort, description, config, folder, units)
     if len(models) > 1:
         print("Comparison:", _write_comparison(outcomes, output))
     print(f"Total wall time {time.perf_counter() - start:.1f} s")

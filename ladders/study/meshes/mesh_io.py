@@ -14,6 +14,7 @@ triangulation. Folders and tables of meshes are read by
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -82,17 +83,29 @@ def read_mesh(path, faces=None) -> tuple[np.ndarray, np.ndarray]:
     return v, f.astype(np.int64)
 
 
-def write_mesh(path, vertices, faces) -> Path:
+def write_mesh(path, vertices, faces, *, atomic: bool = False) -> Path:
     """Write a triangle mesh; the format follows the extension (see ``WRITE_EXTENSIONS``).
 
     PLY is written through meshio as binary little-endian with double coordinates,
     OBJ and OFF through trimesh with 17 significant digits, VTK as ASCII legacy
     polydata, VTU through meshio (double, zlib-compressed), STL through trimesh as
-    binary float32 (the format's only precision).
+    binary float32 (the format's only precision). With ``atomic=True`` the file is
+    written to a hidden temporary name in its folder and renamed: an interrupted
+    write never leaves a partial file under ``path``.
     """
     path = Path(path)
     fmt = MESH_FORMATS.get(path.suffix.lower())
     if fmt is None or fmt.write is None:
         raise MeshFolderError(f"{path}: unsupported extension, expected one of {WRITE_EXTENSIONS}")
-    fmt.write(path, np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int64))
+    v, f = np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int64)
+    if not atomic:
+        fmt.write(path, v, f)
+        return path
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
+    try:
+        fmt.write(tmp, v, f)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
     return path

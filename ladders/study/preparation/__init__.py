@@ -1,6 +1,8 @@
 """From segmentations to a cohort in correspondence: units, alignment, correspondence, atlas.
 
 - :mod:`.units`: :func:`check_units_and_pose`, sizes and poses against the atlas's;
+  :mod:`.cohort_units`: :func:`check_cohort_units` (a cohort in correspondence) and
+  :func:`read_atlas_inputs` (the ED meshes of a folder, for an atlas), in one unit;
 - :mod:`.alignment`: :class:`SimilarityTransform`, :func:`procrustes` (with
   correspondence) and :func:`icp_align` (without); :mod:`.affine`: the affine
   pre-alignment of the atlas (:func:`affine_icp`);
@@ -23,8 +25,9 @@ from .alignment import (
     procrustes,
     random_rigid_transform,
 )
-from .atlas import AtlasResult, estimate_atlas
+from .atlas import AtlasResult, estimate_atlas, meshes_correspond
 from .cohort_correspondence import CohortCorrespondence, correspond_cohort, scan_segmentations
+from .cohort_units import AtlasInputs, check_cohort_units, read_atlas_inputs
 from .correspondence import (
     CorrespondenceSettings,
     MeshCorrespondence,
@@ -36,7 +39,14 @@ from .quality_table import quality_rows, write_quality_table
 from .remeshing import remesh
 from .simulation import procrustes_aligned, recovery_errors, simulate_segmentations
 from .surface_distance import distances_to_surface, surface_distances
-from .units import UNITS_IN_MM, MeshSize, UnitsError, UnitsReport, check_units_and_pose
+from .units import (
+    UNITS_IN_MM,
+    MeshSize,
+    UnitsError,
+    UnitsReport,
+    check_units_and_pose,
+    mesh_size,
+)
 
 __all__ = [
     "affine_icp",
@@ -48,6 +58,9 @@ __all__ = [
     "random_rigid_transform",
     "AtlasResult",
     "estimate_atlas",
+    "meshes_correspond",
+    "AtlasInputs",
+    "read_atlas_inputs",
     "CohortCorrespondence",
     "correspond_cohort",
     "scan_segmentations",
@@ -69,4 +82,6 @@ __all__ = [
     "UnitsError",
     "UnitsReport",
     "check_units_and_pose",
+    "check_cohort_units",
+    "mesh_size",
 ]

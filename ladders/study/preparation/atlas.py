@@ -29,7 +29,7 @@ from manifolds.validation import check_float, check_int
 from .alignment import SimilarityTransform, icp_align, procrustes
 from .correspondence import CorrespondenceSettings
 
-__all__ = ["AtlasResult", "estimate_atlas"]
+__all__ = ["AtlasResult", "estimate_atlas", "meshes_correspond"]
 
 
 @dataclass
@@ -51,7 +51,8 @@ class AtlasResult:
     transforms : list of SimilarityTransform
         The rigid alignment of each mesh onto the start.
     corresponding : bool
-        Whether the meshes were in correspondence (squared distance) or not (surface term).
+        Whether the targets were the meshes' vertices in correspondence (squared
+        distance) or their surfaces (the surface data term).
     message : str
     """
 
@@ -84,8 +85,31 @@ def _start(meshes, initial, corresponding):
     return meshes[index]
 
 
-def _aligned_targets(meshes, start_v, start_f, corresponding, align, settings):
-    """The rigid alignment of each mesh onto the start and the registration targets."""
+def meshes_correspond(meshes) -> bool:
+    """Whether the meshes ``[(vertices, faces), ...]`` share one vertex count and one
+    triangulation (the squared-distance term applies; else a surface term)."""
+    v0, f0 = meshes[0]
+    return all(v.shape == v0.shape and np.array_equal(f, f0) for v, f in meshes)
+
+
+def _start_and_term(meshes, initial, surface_term):
+    """The start's vertices and faces, whether the meshes and the start correspond,
+    and whether the targets are surfaces."""
+    corresponding = meshes_correspond(meshes)
+    start_v, start_f = _start(meshes, initial, corresponding)
+    corresponding = corresponding and meshes_correspond([meshes[0], (start_v, start_f)])
+    surface = not corresponding if surface_term is None else bool(surface_term)
+    if not (surface or corresponding):
+        raise ValueError(
+            "estimate_atlas: surface_term: False needs meshes (and a start) in correspondence, "
+            "with one vertex count and one triangulation"
+        )
+    return start_v, start_f, corresponding, surface
+
+
+def _aligned_targets(meshes, start_v, start_f, corresponding, surface, align, settings):
+    """The rigid alignment of each mesh onto the start (Procrustes when they correspond,
+    else ICP) and the registration targets (the surface term's, or the vertices)."""
     transforms = []
     for v, f in meshes:
         if not align:
@@ -95,7 +119,7 @@ def _aligned_targets(meshes, start_v, start_f, corresponding, align, settings):
         else:
             transforms.append(icp_align(v, f, start_v, start_f)[0])
     moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
-    if corresponding:
+    if not surface:
         return transforms, np.stack([v for v, _ in moved])
     return transforms, [settings.data_term_for(v, f, start_f) for v, f in moved]
 
@@ -109,6 +133,8 @@ def estimate_atlas(
     tol: float = 0.1,
     max_iter: int = 10,
     progress: Callable | None = None,
+    surface_term: bool | None = None,
+    checkpoint: Callable | None = None,
 ) -> AtlasResult:
     """LDDMM atlas of ``meshes`` (see the module).
 
@@ -132,6 +158,14 @@ def estimate_atlas(
     max_iter : int, default 10
     progress : callable, optional
         ``progress(iteration, objective, gradient_norm)`` after every iteration.
+    surface_term : bool, optional
+        ``None``: the surface data term when the meshes (and the start) do not
+        correspond, the squared distance when they do; ``True``: the surface
+        term in any case; ``False``: the squared distance, which needs meshes in
+        correspondence.
+    checkpoint : callable, optional
+        ``checkpoint(iteration, vertices)`` with every iterate (the start first), e.g.
+        to keep the last one when the estimation is interrupted.
 
     Returns
     -------
@@ -142,11 +176,10 @@ def estimate_atlas(
     if len(meshes) == 0:
         raise ValueError("estimate_atlas: meshes: no mesh given")
     meshes = [check_mesh(v, f, f"estimate_atlas: mesh {i}") for i, (v, f) in enumerate(meshes)]
-    v0, f0 = meshes[0]
-    corresponding = all(v.shape == v0.shape and np.array_equal(f, f0) for v, f in meshes)
-    start_v, start_f = _start(meshes, initial, corresponding)
-    corresponding = corresponding and start_v.shape == v0.shape and np.array_equal(start_f, f0)
-    transforms, targets = _aligned_targets(meshes, start_v, start_f, corresponding, align, settings)
+    start_v, start_f, corresponding, surface = _start_and_term(meshes, initial, surface_term)
+    transforms, targets = _aligned_targets(
+        meshes, start_v, start_f, corresponding, surface, align, settings
+    )
     space = LDDMMLandmarks(len(start_v), 3, alpha=settings.alpha, settings=settings.registration,
                            cache_size=len(meshes) + 1)  # fmt: skip
     objectives, previous = [], [start_v]
@@ -155,6 +188,8 @@ def estimate_atlas(
         objectives.append(float(sum(space.register(x, t).objective for t in targets)))
         moved = float(np.sqrt(((x - previous[-1]) ** 2).sum(1).mean()))
         previous.append(x)
+        if checkpoint is not None:
+            checkpoint(it, np.array(x))
         if progress is not None:
             progress(it, objectives[-1], gnorm)
         return it > 0 and moved <= tol
@@ -162,5 +197,5 @@ def estimate_atlas(
     res = frechet_mean(space, targets, initial=start_v, tol=0.0, max_iter=max_iter, callback=report)
     return AtlasResult(
         np.array(res.mean), start_f, res.converged, res.n_iter, objectives, res.gradient_norms,
-        transforms, corresponding, res.message,
+        transforms, not surface, res.message,
     )  # fmt: skip

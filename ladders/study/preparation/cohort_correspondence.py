@@ -11,9 +11,10 @@ and writes, in ``output``::
     quality.csv, quality.md         one row per mesh, flagged rows first (:mod:`.quality_table`)
     correspondence/<name>.json      per subject: status, transform, units, quality, hashes
 
-A subject that fails is recorded with its reason (``"status": "failed"``) and
-the others finish. Every file is written atomically and a subject's record last,
-so an interrupted run loses nothing: the next run with the same atlas, settings
+A subject that fails is recorded with its reason (``"status": "failed"``), its
+meshes from an earlier run are removed (the study must not read them), and the
+others finish. Every file is written atomically and a subject's record last, so
+an interrupted run loses nothing: the next run with the same atlas, settings
 and input files skips the subjects already done (failed ones are retried).
 The arguments are those a command line needs (atlas, meshes, output, jobs,
 progress, resume), so a command is a thin wrapper.
@@ -32,7 +33,7 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ..cohort.mesh_folder import natural_key, scan_mesh_folder
-from ..meshes.mesh_io import read_mesh, write_mesh
+from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
 from ..running.provenance import file_sha256
 from ..running.store import array_digest, atomic_write_text, validate_subject_name
 from .correspondence import CorrespondenceSettings, correspond_subject
@@ -57,6 +58,8 @@ class CohortCorrespondence:
         Subject names.
     units : dict
         Per subject, the unit assumed for its input files.
+    quality : list of dict
+        The rows of ``quality.csv`` (:func:`~.quality_table.quality_rows`), flagged first.
     """
 
     output: Path
@@ -65,35 +68,33 @@ class CohortCorrespondence:
     reused: list = field(default_factory=list)
     failed: list = field(default_factory=list)
     units: dict = field(default_factory=dict)
+    quality: list = field(default_factory=list)
+
+    @property
+    def flagged(self) -> list[str]:
+        """The meshes flagged for inspection, as ``"subject phase"``, in the table's order."""
+        return [f"{r['subject']} {r['phase']}" for r in self.quality if r["flagged"]]
 
 
-def scan_segmentations(folder) -> dict:
+def scan_segmentations(folder, phases=("ed", "es")) -> dict:
     """``{subject: {"ed": path, "es": path}}`` of a folder in the study's layout, naturally sorted.
 
     An ``atlas.<ext>`` in the folder is ignored here (the atlas is given separately).
+    Every subject must have a mesh of each of ``phases`` (``("ed",)`` for an atlas).
     """
     folder = Path(folder)
     if not folder.is_dir():
         raise FileNotFoundError(f"meshes: {folder} is not a folder")
     _, entries, _ = scan_mesh_folder(folder)
     if not entries:
-        raise ValueError(f"meshes: {folder} holds no '<name>_ed.<ext>' / '<name>_es.<ext>' files")
+        names = " / ".join(f"'<name>_{p}.<ext>'" for p in phases)
+        raise ValueError(f"meshes: {folder} holds no {names} files")
     for name, slot in entries.items():
         validate_subject_name(name)
-        missing = {"ed", "es"} - set(slot)
+        missing = set(phases) - set(slot)
         if missing:
             raise ValueError(f"meshes: subject {name!r} has no {missing.pop().upper()} mesh")
-    return {n: entries[n] for n in sorted(entries, key=natural_key)}
-
-
-def _atomic_mesh(path: Path, vertices, faces) -> None:
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
-    try:
-        write_mesh(tmp, vertices, faces)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    return {n: {p: entries[n][p] for p in phases} for n in sorted(entries, key=natural_key)}
 
 
 def _fingerprint(settings, atlas_hash, slot, factor) -> dict:
@@ -139,13 +140,15 @@ def _subject(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -
             meshes[phase] = (v * factor, f)
         out = correspond_subject(*atlas, meshes["ed"], meshes["es"], settings)
         for phase, c in (("ed", out.ed), ("es", out.es)):
-            _atomic_mesh(output / f"{name}_{phase}{ext}", c.vertices, atlas[1])
+            write_mesh(output / f"{name}_{phase}{ext}", c.vertices, atlas[1], atomic=True)
             record[phase] = {"input": str(slot[phase]), "n_input_vertices": len(meshes[phase][0]),
                              **c.quality}  # fmt: skip
         record.update(status="ok", transform=out.transform.as_dict())
     except Exception as exc:  # a failing subject must not stop the others
         record.update(status="failed", reason=f"{type(exc).__name__}: {exc}",
                       traceback=traceback.format_exc())  # fmt: skip
+        for phase in ("ed", "es"):  # no earlier result is left for the study to read
+            (output / f"{name}_{phase}{ext}").unlink(missing_ok=True)
     atomic_write_text(output / RECORDS / f"{name}.json", json.dumps(record, indent=1))
     return record
 
@@ -162,9 +165,11 @@ def _readable(entries: dict) -> dict:
 
 
 def _read_atlas(atlas):
+    """The atlas's mesh and the extension to write (its file's when written, else ``.vtk``)."""
     if isinstance(atlas, str | os.PathLike):
         v, f = read_mesh(atlas)
-        return (v, f), Path(atlas).suffix.lower()
+        ext = Path(atlas).suffix.lower()
+        return (v, f), ext if ext in WRITE_EXTENSIONS else ".vtk"
     v, f = atlas
     return (np.asarray(v, dtype=float), np.asarray(f, dtype=np.int64)), ".vtk"
 
@@ -180,6 +185,7 @@ def correspond_cohort(
     resume: bool = True,
     units=None,
     allow_scale: bool = False,
+    allow_pose: bool | None = None,
     atlas_unit: str = "mm",
     ext: str | None = None,
 ) -> CohortCorrespondence:
@@ -200,10 +206,14 @@ def correspond_cohort(
     resume : bool, default True
         Skip subjects already corresponded with the same atlas, settings, inputs and unit.
     units, allow_scale, atlas_unit
-        As in :func:`~ladders.study.preparation.units.check_units_and_pose` (the
-        meshes' pose is not checked: they are aligned rigidly).
+        As in :func:`~ladders.study.preparation.units.check_units_and_pose`.
+    allow_pose : bool, optional
+        Accept meshes far from the atlas's pose; by default they are accepted
+        when ``settings.alignment == "icp"`` (the pose is then estimated), and
+        refused without alignment.
     ext : str, optional
-        Extension of the written meshes (default the atlas file's, ``.vtk`` for arrays).
+        Extension of the written meshes (default the atlas file's when
+        :func:`~ladders.study.meshes.mesh_io.write_mesh` writes it, else ``.vtk``).
 
     Returns
     -------
@@ -212,7 +222,8 @@ def correspond_cohort(
     Raises
     ------
     UnitsError
-        Meshes whose size disagrees with the atlas's, unless ``units`` or ``allow_scale``.
+        Meshes whose size disagrees with the atlas's, unless ``units`` or ``allow_scale``,
+        or whose pose does, unless ``allow_pose``.
     """
     settings = settings or CorrespondenceSettings()
     atlas_mesh, atlas_ext = _read_atlas(atlas)
@@ -220,11 +231,12 @@ def correspond_cohort(
     entries = scan_segmentations(meshes) if not isinstance(meshes, dict) else dict(meshes)
     report = check_units_and_pose(
         *atlas_mesh, _readable(entries), atlas_unit=atlas_unit, units=units,
-        allow_scale=allow_scale, allow_pose=True,
+        allow_scale=allow_scale,
+        allow_pose=settings.alignment == "icp" if allow_pose is None else allow_pose,
     )  # fmt: skip
     output = Path(output)
     (output / RECORDS).mkdir(parents=True, exist_ok=True)
-    _atomic_mesh(output / f"atlas{ext}", *atlas_mesh)
+    write_mesh(output / f"atlas{ext}", *atlas_mesh, atomic=True)
     outcome = CohortCorrespondence(output, units=report.assumed_units)
     atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
     jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext)
@@ -243,5 +255,5 @@ def correspond_cohort(
         records[record["subject"]] = record
     outcome.records = [records[n] for n in entries]
     outcome.failed = [r["subject"] for r in outcome.records if r["status"] != "ok"]
-    write_quality_table(outcome.records, output, settings, report.assumed_units)
+    outcome.quality = write_quality_table(outcome.records, output, settings, report.assumed_units)
     return outcome

@@ -18,6 +18,10 @@ mesh, its size, the atlas's and the likely unit, unless told what to do:
 * ``allow_scale``: accept the sizes as they are;
 * ``allow_pose``: accept meshes far from the atlas's pose (e.g. when they will be
   aligned rigidly first, as the correspondence does).
+
+The report says what was assumed (:meth:`UnitsReport.describe`, :meth:`UnitsReport.as_dict`:
+checked, given or detected; what was accepted). :mod:`.cohort_units` applies the
+check to a cohort in correspondence and to the meshes an atlas is estimated from.
 """
 
 from __future__ import annotations
@@ -30,7 +34,14 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 
 from .alignment import principal_frame
 
-__all__ = ["UNITS_IN_MM", "UnitsError", "MeshSize", "UnitsReport", "check_units_and_pose"]
+__all__ = [
+    "UNITS_IN_MM",
+    "UnitsError",
+    "MeshSize",
+    "UnitsReport",
+    "check_units_and_pose",
+    "mesh_size",
+]
 
 #: Length units and their size in millimetres.
 UNITS_IN_MM = {"m": 1000.0, "cm": 10.0, "mm": 1.0, "um": 1e-3}
@@ -38,8 +49,43 @@ _SCALE_TOLERANCE = 0.5  # |log10 r| above this is a scale disagreement (factor 3
 _POWER_TOLERANCE = 0.3  # |log10 r - k| below this names the unit of 10^k
 
 
+_HINTS = {  # how to proceed, in the Python API's words and in the command line's
+    "scale": (
+        "Give the meshes' unit (units='m', 'cm', 'mm' or 'auto') or accept the sizes "
+        "(allow_scale=True).",
+        "give the meshes' unit with --units (m, cm, mm, um, or auto: each mesh converted by "
+        "the power of ten its size suggests) or accept the sizes with --allow-scale",
+    ),
+    "pose": (
+        "Align them rigidly first (ladders.study.preparation.correspond_cohort does) or "
+        "accept the poses (allow_pose=True).",
+        "align them rigidly first (symladders correspond does) or accept the poses with "
+        "--allow-pose",
+    ),
+}
+
+
 class UnitsError(ValueError):
-    """Meshes whose size or pose disagrees with the atlas's (the message lists them)."""
+    """Meshes whose size or pose disagrees with the atlas's (the message lists them).
+
+    Parameters
+    ----------
+    problem : str
+        What disagrees, one line per mesh after the first.
+    kind : {"scale", "pose"} or None
+        The disagreement, which chooses the hint appended to the message.
+    """
+
+    def __init__(self, problem: str, kind: str | None = None):
+        self.problem, self.kind = problem, kind
+        hint = _HINTS[kind][0] if kind else ""
+        super().__init__(f"{problem}\n{hint}" if hint else problem)
+
+    def for_command_line(self) -> str:
+        """The message in one line, with the command-line flags as the way out."""
+        first, *rest = [line.strip() for line in self.problem.splitlines() if line.strip()]
+        text = " ".join([first, "; ".join(rest)]) if rest else first
+        return f"{text}; {_HINTS[self.kind][1]}" if self.kind else text
 
 
 @dataclass
@@ -82,6 +128,12 @@ class UnitsReport:
         Per subject, the factor its coordinates are multiplied by to be in the atlas's unit.
     assumed_units : dict
         Per subject, the unit assumed for its files.
+    requested : str, dict or None
+        The ``units`` asked for (``None``: the atlas's, checked).
+    accepted_scale, accepted_pose : list of str
+        Meshes (``subject:phase``) whose size (pose) disagreed and was accepted.
+    pose_checked : bool
+        Whether a far pose would have been refused (``allow_pose=False``).
     """
 
     atlas_size: float
@@ -89,6 +141,58 @@ class UnitsReport:
     meshes: list = field(default_factory=list)
     factors: dict = field(default_factory=dict)
     assumed_units: dict = field(default_factory=dict)
+    requested: object = None
+    accepted_scale: list = field(default_factory=list)
+    accepted_pose: list = field(default_factory=list)
+    pose_checked: bool = True
+
+    @property
+    def how(self) -> str:
+        """``"checked"`` (no unit given), ``"detected"`` (``"auto"``) or ``"given"``."""
+        if self.requested is None:
+            return "checked"
+        return "detected" if self.requested == "auto" else "given"
+
+    def converted(self) -> dict:
+        """``{subject: unit}`` of the subjects read in another unit than the atlas's."""
+        return {n: u for n, u in self.assumed_units.items() if u != self.atlas_unit}
+
+    def as_dict(self) -> dict:
+        """JSON-ready: the unit, how it was obtained, the conversions and acceptances."""
+        return {
+            "unit": self.atlas_unit,
+            "how": self.how,
+            "requested": self.requested,
+            "atlas_size": self.atlas_size,
+            "subjects": dict(self.assumed_units),
+            "factors": dict(self.factors),
+            "accepted_scale": list(self.accepted_scale),
+            "accepted_pose": list(self.accepted_pose),
+            "pose_checked": self.pose_checked,
+        }
+
+    def describe(self) -> str:
+        """One paragraph: the unit assumed, whether it was checked, given or detected."""
+        unit = self.atlas_unit
+        what = "size and pose were" if self.pose_checked else "size was"
+        text = (
+            f"Lengths in {unit}: the atlas is taken to be in {unit}, and "
+            + {
+                "checked": f"every mesh's {what} checked against the atlas's.",
+                "detected": f"each subject's unit was detected from its size (every mesh's {what} "
+                "then checked against the atlas's).",
+                "given": f"the subjects' unit was given as {self.requested} (every mesh's {what} "
+                "then checked against the atlas's).",
+            }[self.how]
+        )
+        converted = ", ".join(f"{n} (from {u})" for n, u in self.converted().items())
+        if converted:
+            text += f" Converted to {unit}: {converted}."
+        if self.accepted_scale:
+            text += f" Sizes that disagree, accepted as they are: {', '.join(self.accepted_scale)}."
+        if self.accepted_pose:
+            text += f" Poses far from the atlas's, accepted: {', '.join(self.accepted_pose)}."
+        return text
 
 
 def _size_and_frame(vertices, faces):
@@ -97,6 +201,12 @@ def _size_and_frame(vertices, faces):
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
     d2 = (((a + b + c) / 3.0 - centroid) ** 2).sum(1)
     return float(np.sqrt(area @ d2 / area.sum())), centroid, axes[:, 0]
+
+
+def mesh_size(vertices, faces) -> float:
+    """The RMS distance of a mesh's surface to its centroid (area-weighted over its triangles)."""
+    v, f = check_mesh(vertices, faces, "mesh_size")
+    return _size_and_frame(v, f)[0]
 
 
 def _unit_of_ratio(ratio: float, atlas_unit: str) -> str | None:
@@ -150,10 +260,10 @@ def _measure(meshes: dict, atlas_size, atlas_axis, atlas_unit):
     return sizes, centroids
 
 
-def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str) -> str:
+def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str, reference: str) -> str:
     lines = [
-        f"{len(bad)} mesh(es) {what} (atlas size {atlas_size:.4g} {atlas_unit}, the RMS "
-        "distance of its surface to its centroid):"
+        f"{len(bad)} mesh(es) {what} (size {atlas_size:.4g} {atlas_unit}: the RMS distance "
+        "of the surface to its centroid):"
     ]
     for s in bad[:20]:
         unit = f"; likely in {s.likely_unit}" if s.likely_unit else ""
@@ -164,6 +274,24 @@ def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str) -> str:
     if len(bad) > 20:
         lines.append(f"  ... and {len(bad) - 20} more")
     return "\n".join(lines)
+
+
+def _disagreements(report: UnitsReport, centroids, atlas_centroid, max_offset, max_angle):
+    """Set the offsets (in the atlas's unit); the meshes of another scale, and those far away."""
+    factor = {s.name: report.factors[s.name.split(":")[0]] for s in report.meshes}
+    for s, centroid in zip(report.meshes, centroids):
+        s.offset = float(
+            np.linalg.norm(centroid * factor[s.name] - atlas_centroid) / report.atlas_size
+        )
+    scale = [
+        s for s in report.meshes if abs(np.log10(s.ratio * factor[s.name])) >= _SCALE_TOLERANCE
+    ]
+    far = [  # a mesh of another scale (accepted) has no comparable pose
+        s
+        for s in report.meshes
+        if s not in scale and (s.offset > max_offset or s.angle > max_angle)
+    ]
+    return scale, far
 
 
 def check_units_and_pose(
@@ -177,6 +305,7 @@ def check_units_and_pose(
     allow_pose: bool = False,
     max_offset: float = 1.0,
     max_angle: float = 45.0,
+    reference: str = "the atlas",
 ) -> UnitsReport:
     """Check that every mesh has the atlas's unit and is near its pose (see the module).
 
@@ -196,6 +325,8 @@ def check_units_and_pose(
         Centroid distance, in atlas sizes, beyond which a pose is far.
     max_angle : float
         Angle between principal axes, in degrees, beyond which a pose is far.
+    reference : str, default "the atlas"
+        What the atlas is called in the messages.
 
     Returns
     -------
@@ -214,25 +345,16 @@ def check_units_and_pose(
     atlas_size, atlas_centroid, atlas_axis = _size_and_frame(av, af)
     sizes, centroids = _measure(meshes, atlas_size, atlas_axis, atlas_unit)
     assumed = _factors(list(meshes), sizes, units, atlas_unit)
-    report = UnitsReport(atlas_size, atlas_unit, sizes, assumed_units=assumed)
+    report = UnitsReport(atlas_size, atlas_unit, sizes, assumed_units=assumed, requested=units)
     report.factors = {n: UNITS_IN_MM[u] / UNITS_IN_MM[atlas_unit] for n, u in assumed.items()}
-    factor = {s.name: report.factors[s.name.split(":")[0]] for s in sizes}
-    for s, centroid in zip(sizes, centroids):  # offsets in the atlas's unit
-        s.offset = float(np.linalg.norm(centroid * factor[s.name] - atlas_centroid) / atlas_size)
-    bad_scale = [s for s in sizes if abs(np.log10(s.ratio * factor[s.name])) >= _SCALE_TOLERANCE]
-    if bad_scale and not allow_scale:
-        raise UnitsError(
-            _message(bad_scale, atlas_size, atlas_unit, "disagree(s) in size with the atlas")
-            + "\nGive the meshes' unit (units='m', 'cm', 'mm' or 'auto'; --units) or accept the "
-            "sizes (allow_scale=True; --allow-scale)."
-        )
-    far = [  # a mesh of another scale (accepted) has no comparable pose
-        s for s in sizes if s not in bad_scale and (s.offset > max_offset or s.angle > max_angle)
-    ]
-    if far and not allow_pose:
-        raise UnitsError(
-            _message(far, atlas_size, atlas_unit, "lie(s) far from the atlas's pose")
-            + "\nAlign them rigidly first (ladders.study.preparation.correspond_cohort does) "
-            "or accept the poses (allow_pose=True)."
-        )
+    scale, far = _disagreements(report, centroids, atlas_centroid, max_offset, max_angle)
+    for bad, allowed, what, kind in (
+        (scale, allow_scale, f"disagree(s) in size with {reference}", "scale"),
+        (far, allow_pose, f"lie(s) far from {reference}'s pose", "pose"),
+    ):
+        if bad and not allowed:
+            raise UnitsError(_message(bad, atlas_size, atlas_unit, what, reference), kind)
+    report.accepted_scale = [s.name for s in scale]
+    report.accepted_pose = [s.name for s in far]
+    report.pose_checked = not allow_pose
     return report

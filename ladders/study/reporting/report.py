@@ -203,6 +203,7 @@ def write_report(
     subjects_ed=None,
     unit: str | None = None,
     stopping: str | None = None,
+    units: str | None = None,
 ) -> dict:
     """Write the tables and figures of the study; return their paths.
 
@@ -227,6 +228,10 @@ def write_report(
         The registrations' stopping rule in words
         (:meth:`manifolds.numerics.solvers.StoppingRule.describe`), stated in
         ``summary.md`` as what "converged" means.
+    units : str, optional
+        How the meshes' units were obtained (checked, given, detected;
+        :meth:`~ladders.study.preparation.UnitsReport.describe`), stated in ``summary.md``
+        under Table 1.
 
     Returns
     -------
@@ -244,7 +249,8 @@ def write_report(
         return {"summary_md": paths["summary_md"]}
     unit = unit or ok[0].pairs[0].unit
     rows, paired = summarize(results), paired_statistics(results, seed=0)
-    text = summary_markdown(rows, unit) + "\n" + convergence_markdown(results, stopping) + "\n"
+    text = summary_markdown(rows, unit) + "\n" + (f"{units}\n\n" if units else "")
+    text += convergence_markdown(results, stopping) + "\n"
     text += paired_markdown(paired, unit)
     if failures_markdown(results):
         text += "\n" + failures_markdown(results)

@@ -1,0 +1,181 @@
+"""``symladders correspond``: a folder of segmentations into a folder the study reads.
+
+A thin wrapper of :func:`~ladders.study.preparation.correspond_cohort`: each
+subject's ED and ES meshes (any vertex count, format or pose) are aligned onto
+the atlas and the atlas is registered onto them; ``OUTPUT`` then holds the atlas,
+the corresponded meshes (``symladders study --meshes OUTPUT`` reads it), the
+quality table and one record per subject. Exit status 1 when a subject failed
+(the others finished, the reason is in the quality table), 2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .cli_types import DefaultsFormatter, UsageError, existing_folder, jobs_count, output_folder
+from .preparation_arguments import (
+    add_data_term_arguments,
+    add_units_arguments,
+    correspondence_settings,
+    mesh_file,
+    print_line,
+    units_usage_error,
+)
+
+__all__ = ["add_correspond_parser", "run_correspond_command"]
+
+_SHOWN = 10  # flagged meshes named in the last line
+
+
+def add_correspond_parser(sub) -> None:
+    """Register the ``correspond`` subcommand on an argparse subparsers object."""
+    from ..meshes import WRITE_EXTENSIONS
+
+    p = sub.add_parser(
+        "correspond",
+        help="bring segmentations (any vertex count, format, pose, unit) into correspondence "
+        "with an atlas",
+        description=(
+            "Align each subject's ED and ES meshes rigidly onto the atlas (one transform per "
+            "subject, estimated on ED), register the atlas onto each with a varifold term and "
+            "write the deformed atlases: OUTPUT holds atlas.<ext>, <name>_ed.<ext>, "
+            "<name>_es.<ext> (read by 'symladders study --meshes OUTPUT'), quality.csv and "
+            "quality.md (meshes to inspect first) and correspondence/<name>.json. A subject "
+            "that fails is recorded with its reason and the others finish (exit status 1). "
+            "Rerunning the command skips the subjects done with the same atlas, settings, "
+            "input files and unit."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    p.add_argument("--atlas", type=mesh_file, required=True, help="the atlas mesh")
+    p.add_argument(
+        "--meshes",
+        type=existing_folder,
+        required=True,
+        help="folder of segmentations: <name>_ed.<ext> and <name>_es.<ext> (or <name>/ed.<ext>, "
+        "<name>/es.<ext>), any vertex count; PLY/OBJ/STL/OFF/VTK/VTU/VTP",
+    )
+    p.add_argument(
+        "--output",
+        "-o",
+        type=output_folder,
+        default="symladders-output/corresponded",
+        help="folder of the corresponded meshes",
+    )
+    p.add_argument(
+        "--ext",
+        choices=[e.lstrip(".") for e in WRITE_EXTENSIONS],
+        default=None,
+        help="format of the written meshes (default: the atlas's, vtk when it is not written)",
+    )
+    add_units_arguments(
+        p,
+        reference="the atlas's (taken to be in mm)",
+        pose="accept meshes far from the atlas's pose; the pose is checked with --alignment "
+        "none only (ICP estimates it otherwise)",
+    )
+    p.add_argument(
+        "--alignment",
+        choices=("icp", "none"),
+        default="icp",
+        help="rigid alignment of each subject onto the atlas; 'none': the meshes are in the "
+        "atlas's frame already",
+    )
+    add_data_term_arguments(p)
+    _add_run_arguments(p)
+    p.set_defaults(run=run_correspond_command)
+
+
+def _add_run_arguments(p) -> None:
+    """Flags of the execution: workers, progress, resume."""
+    p.add_argument(
+        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no line per subject")
+    p.add_argument(
+        "--no-resume",
+        action="store_true",
+        help="correspond every subject again instead of skipping the ones done",
+    )
+
+
+def _scan(folder: Path) -> dict:
+    from ..preparation import scan_segmentations
+
+    try:
+        return scan_segmentations(folder)
+    except (ValueError, OSError) as exc:
+        raise UsageError(
+            f"symladders correspond: error: --meshes: {str(exc).removeprefix('meshes: ')}"
+        ) from None
+
+
+def _check_atlas(path: Path) -> int:
+    """The atlas's vertex count; an unreadable atlas is a usage error naming ``--atlas``."""
+    from ..meshes import read_mesh
+
+    try:
+        return len(read_mesh(path)[0])
+    except (ValueError, OSError) as exc:
+        raise UsageError(f"symladders correspond: error: --atlas: {exc}") from None
+
+
+def _progress(done: int, total: int, name: str, record: dict) -> None:
+    if record["status"] != "ok":
+        print_line(f"[{done}/{total}] {name}: failed ({record.get('reason', '')})")
+        return
+    ed, es = record["ed"], record["es"]
+    late = [p.upper() for p in ("ed", "es") if not record[p]["converged"]]
+    print_line(
+        f"[{done}/{total}] {name}: mean surface distance ED {ed['mean_surface_distance']:.3g}, "
+        f"ES {es['mean_surface_distance']:.3g} mm"
+        + (f"; {' and '.join(late)} stopped before converging" if late else "")
+    )
+
+
+def _summary(outcome) -> str:
+    failed = set(outcome.failed)
+    done = sum(n not in failed for n in outcome.computed)
+    flagged = outcome.flagged
+    named = ", ".join(flagged[:_SHOWN]) + (
+        f" and {len(flagged) - _SHOWN} more" if len(flagged) > _SHOWN else ""
+    )
+    return (
+        f"symladders correspond: {len(outcome.records)} subject(s): {done} corresponded, "
+        f"{len(outcome.reused)} reused, {len(failed)} failed; {len(flagged)} mesh(es) flagged "
+        f"for inspection{': ' + named if flagged else ''}; quality table: "
+        f"{outcome.output / 'quality.md'}"
+    )
+
+
+def run_correspond_command(args) -> int:
+    """Correspond a folder of segmentations from parsed command-line arguments."""
+    from ..preparation import UnitsError, correspond_cohort
+
+    n_vertices = _check_atlas(args.atlas)
+    entries = _scan(args.meshes)
+    settings = correspondence_settings(args, alignment=args.alignment)
+    output = Path(args.output)
+    print_line(
+        f"symladders correspond: {len(entries)} subject(s) from {args.meshes} onto the atlas "
+        f"{args.atlas} ({n_vertices} vertices), output {output}"
+    )
+    args.on_interrupt = f"the subjects done are kept in {output}; rerun the command to resume"
+    try:
+        outcome = correspond_cohort(
+            args.atlas, entries, output, settings, jobs=args.jobs,
+            progress=None if args.no_progress else _progress, resume=not args.no_resume,
+            units=args.units, allow_scale=args.allow_scale,
+            allow_pose=True if args.allow_pose else None, ext=args.ext,
+        )  # fmt: skip
+    except UnitsError as exc:
+        raise units_usage_error("correspond", exc) from None
+    print_line(_summary(outcome))
+    if outcome.failed:
+        print(
+            f"symladders correspond: {len(outcome.failed)} subject(s) failed "
+            f"({', '.join(outcome.failed)}); reasons in {output / 'quality.md'}",
+            file=sys.stderr,
+        )
+    return 1 if outcome.failed else 0

@@ -1,0 +1,107 @@
+"""Units of a cohort: what the report says, a cohort converted, the meshes an atlas is made of."""
+
+import numpy as np
+import pytest
+
+from ladders.study import write_mesh
+from ladders.study.cohort import Cohort
+from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
+from ladders.study.preparation import (
+    UnitsError,
+    check_cohort_units,
+    check_units_and_pose,
+    mesh_size,
+    read_atlas_inputs,
+    remesh,
+)
+
+
+@pytest.fixture(scope="module")
+def cohort():
+    return make_synthetic_cohort(3, n_vertices=150, seed=0)
+
+
+def in_metres(cohort, name="synthetic_001") -> Cohort:
+    subjects = [s if s.name != name else type(s)(s.name, s.ed / 1000, s.es / 1000)
+                for s in cohort.subjects]  # fmt: skip
+    return Cohort(cohort.atlas, cohort.faces, subjects)
+
+
+def cohort_meshes(cohort) -> dict:
+    return {s.name: {"ed": (s.ed, cohort.faces)} for s in cohort.subjects}
+
+
+def test_the_report_says_whether_units_were_checked_detected_or_given(cohort):
+    metres = in_metres(cohort)
+    meshes = cohort_meshes(metres)
+    checked = check_units_and_pose(cohort.atlas, cohort.faces, cohort_meshes(cohort))
+    assert checked.how == "checked" and checked.converted() == {}
+    assert "every mesh's size and pose were checked" in checked.describe()
+    detected = check_units_and_pose(cohort.atlas, cohort.faces, meshes, units="auto")
+    assert detected.how == "detected" and detected.converted() == {"synthetic_001": "m"}
+    assert "Converted to mm: synthetic_001 (from m)" in detected.describe()
+    given = check_units_and_pose(cohort.atlas, cohort.faces, meshes, units="mm", allow_scale=True)
+    assert given.how == "given" and given.accepted_scale == ["synthetic_001:ed"]
+    assert "accepted as they are: synthetic_001:ed" in given.describe()
+    record = detected.as_dict()
+    assert record["how"] == "detected" and record["factors"]["synthetic_001"] == 1000.0
+
+
+def test_the_error_in_one_line_names_the_flags(cohort):
+    meshes = cohort_meshes(in_metres(cohort))
+    with pytest.raises(UnitsError) as info:
+        check_units_and_pose(cohort.atlas, cohort.faces, meshes)
+    assert "units='m'" in str(info.value)  # the API's spelling
+    line = info.value.for_command_line()
+    assert "\n" not in line and "synthetic_001:ed: size" in line and "likely in m" in line
+    assert "--units" in line and "--allow-scale" in line and "units='m'" not in line
+    far = {"a": {"ed": (cohort.subjects[0].ed + [500.0, 0, 0], cohort.faces)}}
+    with pytest.raises(UnitsError) as info:
+        check_units_and_pose(cohort.atlas, cohort.faces, far)
+    assert info.value.kind == "pose" and "--allow-pose" in info.value.for_command_line()
+
+
+def test_a_cohort_is_converted_into_the_atlas_unit(cohort):
+    same, report = check_cohort_units(cohort)
+    assert same is cohort and report.factors["synthetic_000"] == 1.0
+    metres = in_metres(cohort)
+    with pytest.raises(UnitsError, match="synthetic_001:es"):
+        check_cohort_units(metres)
+    converted, report = check_cohort_units(metres, units="auto")
+    assert report.assumed_units == {
+        "synthetic_000": "mm",
+        "synthetic_001": "m",
+        "synthetic_002": "mm",
+    }
+    for s, original in zip(converted.subjects, cohort.subjects):
+        np.testing.assert_allclose(s.es, original.es, rtol=1e-12)
+    moved = Cohort(cohort.atlas, cohort.faces, [
+        type(s)(s.name, s.ed + [400.0, 0, 0], s.es + [400.0, 0, 0]) for s in cohort.subjects
+    ])  # fmt: skip
+    with pytest.raises(UnitsError, match="far from the atlas's pose"):
+        check_cohort_units(moved)
+    _, report = check_cohort_units(moved, allow_pose=True)
+    assert len(report.accepted_pose) == 6
+
+
+def test_the_meshes_of_an_atlas_are_read_in_the_unit_of_the_median_mesh(cohort, tmp_path):
+    seg, sizes = tmp_path / "seg", []
+    seg.mkdir()
+    for i, s in enumerate(cohort.subjects):
+        v, f = remesh(s.ed, cohort.faces, 300)
+        write_mesh(seg / f"{s.name}_ed.ply", v / (1000 if i == 0 else 1), f)  # no ES
+        sizes.append(mesh_size(v, f))
+    (seg / "broken_ed.ply").write_text("not a mesh")
+    with pytest.raises(UnitsError, match=r"synthetic_000:ed: size .*likely in m\b"):
+        read_atlas_inputs(seg)
+    inputs = read_atlas_inputs(seg, units="auto")
+    assert inputs.names == ["synthetic_000", "synthetic_001", "synthetic_002"]
+    assert list(inputs.skipped) == ["broken"] and "MeshFolderError" in inputs.skipped["broken"]
+    # the median of the three (synthetic_000, read in metres, is the smallest)
+    assert inputs.reference == ["synthetic_001", "synthetic_002"][int(np.argmin(sizes[1:]))]
+    for (v, f), size in zip(inputs.meshes, sizes):
+        assert mesh_size(v, f) == pytest.approx(size, rel=1e-9)  # all in mm
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "x_ed.ply").write_text("not a mesh")
+    with pytest.raises(ValueError, match="none of the 1 ED mesh"):
+        read_atlas_inputs(tmp_path / "broken")
