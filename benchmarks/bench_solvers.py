@@ -242,7 +242,7 @@ def plot(cache: dict, path: Path, settings, alpha2: float, subject: int = 0) -> 
             for ax, y in zip(axes[row], (gap, tr[:, 2], tr[:, 3])):
                 ax.loglog(fe, y, label=combo, lw=1)
         titles = ("objective gap to the best (relative)", "largest gradient entry",
-                  "change of phi_1(T) per iteration (mm RMS)")  # fmt: skip
+                  "phi_1(T) change per iteration (mm)")  # fmt: skip
         for ax, title in zip(axes[row], titles):
             ax.set_title(f"{setting}, alpha^2 = {alpha2:g}: {title}", fontsize=8)
             ax.set_xlabel("flow passes (FE)")
