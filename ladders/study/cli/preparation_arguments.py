@@ -93,9 +93,10 @@ def correspondence_settings(args, **changes):
     return CorrespondenceSettings().replace(sigma_w=args.sigma_w, weight=args.weight, **changes)
 
 
-def units_usage_error(command: str, exc) -> UsageError:
-    """A :class:`~ladders.study.preparation.UnitsError` as the command's one-line usage error."""
-    return UsageError(f"symladders {command}: error: --meshes: {exc.for_command_line()}")
+def units_usage_error(command: str, exc, flag: str = "--meshes") -> UsageError:
+    """A :class:`~ladders.study.preparation.UnitsError` as the command's one-line usage error,
+    naming the input flag ``flag``."""
+    return UsageError(f"symladders {command}: error: {flag}: {exc.for_command_line()}")
 
 
 def _mesh_extensions(writable: bool) -> tuple[str, ...]:

@@ -10,6 +10,7 @@ import warnings
 from pathlib import Path
 
 from .cli_types import DefaultsFormatter, UsageError, check_grid_sigma
+from .preparation_arguments import units_usage_error
 from .study_arguments import (
     DEFAULT_ALPHA2,
     DEFAULT_SUBJECTS,
@@ -62,8 +63,8 @@ def _check_units(args, cohort, description: dict):
             cohort, units=args.units, allow_scale=args.allow_scale, allow_pose=args.allow_pose
         )
     except UnitsError as exc:
-        where = "--meshes" if args.meshes is not None else "--cohort"
-        raise UsageError(f"symladders study: error: {where}: {exc.for_command_line()}") from None
+        flag = "--meshes" if args.meshes is not None else "--cohort"
+        raise units_usage_error("study", exc, flag) from None
     description["units"] = report.as_dict()
     return cohort, report.describe()
 
