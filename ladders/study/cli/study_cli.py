@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import json
 import sys
 import time
 import warnings
@@ -232,7 +231,7 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
     )
     if "maps_subject" in paths:
         print(f"Fig. 5b shows subject {paths.pop('maps_subject')} (median ASE).")
-    print("Full tables and figures:", json.dumps({k: str(v) for k, v in paths.items()}, indent=1))
+    print(f"Full tables and figures in {output}:", ", ".join(Path(v).name for v in paths.values()))
     return outcome
 
 
