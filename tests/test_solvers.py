@@ -9,13 +9,15 @@ minimiser), the joint preconditioner's change of variables is exact, and the
 import numpy as np
 import pytest
 
-from manifolds.data_terms import SquaredDistance
-from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, register
+from manifolds.lddmm import (
+    LDDMMLandmarks,
+    RegistrationSettings,
+    build_registration_problem,
+    register,
+)
 from manifolds.lddmm.control_points import resolve_control_points
 from manifolds.lddmm.flow_models import HamiltonianFlow, StationaryKernelFlow
 from manifolds.lddmm.joint_preconditioner import JointPreconditioner
-from manifolds.lddmm.preconditioner import make_preconditioner
-from manifolds.lddmm.registration_problem import RegistrationProblem
 from manifolds.numerics.solvers import SOLVERS, StoppingRule, steihaug_cg
 
 SIGMA = 0.6
@@ -30,13 +32,19 @@ def exact_pair(seed=0, k=24, dim=2, policy="grid", scale=0.3):
 
 
 def problem_at(template, target, alpha, settings, model_class=HamiltonianFlow):
-    kernel = settings.make_kernel()
-    cp = resolve_control_points(template, settings.control_points_policy, settings.sigma)
-    pre = make_preconditioner(kernel, template, cp, alpha, False)
-    model = model_class(kernel, settings.integrator or "euler", settings.n_steps)
-    prob = RegistrationProblem(model, template, SquaredDistance(target), alpha, settings, pre)
-    mu0 = pre.linearised_start(kernel, template, target - template, cp)
-    return prob, prob.start(mu0, cp)
+    return build_registration_problem(model_class, template, target, alpha, settings)
+
+
+def test_built_problem_solved_by_hand_equals_register():
+    _, template, target, _ = exact_pair(3)
+    settings = RegistrationSettings(sigma=SIGMA, control_points="grid", max_iter=200)
+    problem, x0 = problem_at(template, target, 0.3, settings)
+    opt = SOLVERS["lbfgsb"](problem, x0, settings, StoppingRule.from_settings(settings))
+    mine = problem.result(opt)
+    res = register(template, target, 0.3, settings)
+    np.testing.assert_allclose(mine.momenta, res.momenta, rtol=1e-12, atol=1e-14)
+    assert mine.n_flow_evaluations == res.n_flow_evaluations
+    assert problem.size == x0.size == res.momenta.size
 
 
 @pytest.mark.parametrize("model_class", [HamiltonianFlow, StationaryKernelFlow])

@@ -29,7 +29,12 @@ from .control_points import POLICIES, grid_control_points, resolve_control_point
 from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_jvp, shooting_vjp
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
-from .registration import RegistrationResult, register, registration_objective
+from .registration import (
+    RegistrationResult,
+    build_registration_problem,
+    register,
+    registration_objective,
+)
 from .registration_cache import RegistrationCache
 from .registration_problem import RegistrationProblem
 from .settings import RegistrationSettings
@@ -64,6 +69,7 @@ __all__ = [
     "RegistrationResult",
     "RegistrationSettings",
     "RegistrationProblem",
+    "build_registration_problem",
     "RegistrationCache",
     "register",
     "registration_objective",

@@ -45,6 +45,7 @@ __all__ = [
     "model_objective",
     "register",
     "run_registration",
+    "build_registration_problem",
 ]
 
 
@@ -265,7 +266,7 @@ def _check_settings(settings, kernel, label):
     return kernel
 
 
-def run_registration(
+def build_registration_problem(
     model_class: type[FlowModel],
     template,
     target,
@@ -275,14 +276,19 @@ def run_registration(
     control_points=None,
     initial_momenta=None,
     kernel: GaussianKernel | None = None,
-    warn: bool = True,
-) -> RegistrationResult:
-    """The driver shared by the LDDMM and SVF registrations.
+) -> tuple[RegistrationProblem, np.ndarray]:
+    """The problem of eq. (3) that :func:`run_registration` hands to the solver, and its start.
 
-    ``model_class`` is the deformation model (:class:`HamiltonianFlow`,
-    :class:`StationaryKernelFlow`); its ``default_integrator`` is used when the
-    settings leave the integrator to None. The other parameters are those of
-    :func:`register`.
+    For a solver or an analysis of one's own: ``problem.value_and_gradient(x)``,
+    ``problem.gauss_newton_product(x, v)``, ``problem.shape(x)`` and
+    ``problem.n_flow_evaluations`` are what the library's solvers use.
+
+    Returns
+    -------
+    problem : RegistrationProblem
+    x0 : array, shape ``(problem.size,)``
+        The start in the solver's variables (the linearised start unless
+        ``initial_momenta`` is given).
     """
     label = model_class.label
     kernel = _check_settings(settings, kernel, label)
@@ -309,14 +315,45 @@ def run_registration(
     model = model_class(kernel, settings.integrator or model_class.default_integrator,
                         settings.n_steps)  # fmt: skip
     problem = RegistrationProblem(model, template, data_term, alpha, settings, pre, dense)
-    x0 = problem.start(mu0, cp)
+    return problem, problem.start(mu0, cp)
+
+
+def run_registration(
+    model_class: type[FlowModel],
+    template,
+    target,
+    alpha: float,
+    settings: RegistrationSettings,
+    *,
+    control_points=None,
+    initial_momenta=None,
+    kernel: GaussianKernel | None = None,
+    warn: bool = True,
+) -> RegistrationResult:
+    """The driver shared by the LDDMM and SVF registrations.
+
+    ``model_class`` is the deformation model (:class:`HamiltonianFlow`,
+    :class:`StationaryKernelFlow`); its ``default_integrator`` is used when the
+    settings leave the integrator to None. The other parameters are those of
+    :func:`register`. The problem is built by :func:`build_registration_problem`.
+    """
+    problem, x0 = build_registration_problem(
+        model_class,
+        template,
+        target,
+        alpha,
+        settings,
+        control_points=control_points,
+        initial_momenta=initial_momenta,
+        kernel=kernel,
+    )
     opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
     result = problem.result(opt)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(
-                f"{label} registration did not converge after {opt.n_iter} iterations "
-                f"({opt.message}); objective {result.objective:.6g}, "
+                f"{model_class.label} registration did not converge after {opt.n_iter} "
+                f"iterations ({opt.message}); objective {result.objective:.6g}, "
                 f"registration error {result.registration_error:.3g}"
             ),
             stacklevel=3,
