@@ -135,8 +135,11 @@ def compare_with_truth(cohort, motions, out, tmp: Path, jobs: int) -> None:
     errors = recovery_errors(cohort, corresponded, transforms, motions)
     for phase in ("ed", "es"):
         values = [e[phase] for e in errors.values()]
+        parts = {key: np.mean([e[f"{phase}_{key}"] for e in errors.values()])
+                 for key in ("normal", "tangential", "circumferential")}  # fmt: skip
         print(f"4. vertex RMS to the model ({phase}): mean {np.mean(values):.2f} max "
-              f"{max(values):.2f} mm")  # fmt: skip
+              f"{max(values):.2f} mm; along the normals {parts['normal']:.2f}, along the "
+              f"surface {parts['tangential']:.2f} (circumferential {parts['circumferential']:.2f})")  # fmt: skip
     t0 = time.perf_counter()
     reference = _table(cohort.atlas, cohort.faces, procrustes_aligned(cohort), tmp / "ref", jobs)
     table = _table(corresponded.atlas, corresponded.faces, corresponded.subjects, tmp / "cor", jobs)

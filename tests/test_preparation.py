@@ -21,6 +21,7 @@ from ladders.study.preparation import (
     random_rigid_transform,
     remesh,
     surface_distances,
+    vertex_error_components,
 )
 from manifolds.lddmm import RegistrationSettings
 
@@ -260,3 +261,24 @@ def test_atlas_bad_input():
     v, f = remesh(c.subjects[0].ed, c.faces, 300)
     with pytest.raises(ValueError, match="'mean' needs meshes in correspondence"):
         estimate_atlas([(c.subjects[1].ed, c.faces), (v, f)], initial="mean")
+
+
+def test_vertex_error_splits_a_twist_and_an_inflation():
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(3)
+    truth, faces = 10.0 * np.asarray(sphere.vertices), np.asarray(sphere.faces)
+    # an inflation moves every vertex along its normal by 0.1
+    inflated = vertex_error_components(truth, 1.01 * truth, faces)
+    assert abs(inflated["total"] - 0.1) < 1e-12
+    assert abs(inflated["normal"] - 0.1) < 1e-3 and inflated["tangential"] < 5e-3
+    # a small twist about z slides vertices along the surface, circumferentially
+    angle = 0.01
+    rot = np.array(
+        [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]]
+    )
+    twisted = vertex_error_components(truth, truth @ rot.T, faces)
+    assert twisted["normal"] < 0.01 * twisted["total"]
+    assert abs(twisted["circumferential"] - twisted["tangential"]) < 1e-3 * twisted["total"]
+    for parts in (inflated, twisted):
+        assert np.isclose(parts["normal"] ** 2 + parts["tangential"] ** 2, parts["total"] ** 2)

@@ -37,7 +37,12 @@ from .correspondence import (
 )
 from .quality_table import quality_rows, write_quality_table
 from .remeshing import remesh
-from .simulation import procrustes_aligned, recovery_errors, simulate_segmentations
+from .simulation import (
+    procrustes_aligned,
+    recovery_errors,
+    simulate_segmentations,
+    vertex_error_components,
+)
 from .surface_distance import distances_to_surface, surface_distances
 from .units import (
     UNITS_IN_MM,
@@ -74,6 +79,7 @@ __all__ = [
     "remesh",
     "simulate_segmentations",
     "recovery_errors",
+    "vertex_error_components",
     "procrustes_aligned",
     "distances_to_surface",
     "surface_distances",

@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from manifolds.validation import check_rng
 
@@ -22,7 +23,12 @@ from ..meshes.mesh_io import write_mesh
 from .alignment import SimilarityTransform, procrustes, random_rigid_transform
 from .remeshing import remesh
 
-__all__ = ["simulate_segmentations", "recovery_errors", "procrustes_aligned"]
+__all__ = [
+    "simulate_segmentations",
+    "recovery_errors",
+    "procrustes_aligned",
+    "vertex_error_components",
+]
 
 
 def simulate_segmentations(
@@ -85,6 +91,10 @@ def recovery_errors(cohort: Cohort, corresponded: Cohort, transforms: dict, moti
     is not determined by its surface: the model's shapes are rotated by the one the
     pipeline chose (``transforms[name] o motions[name]`` about ``z``), evaluated on
     the atlas's grid, and fitted rigidly (on ED, applied to ES) to the corresponded pair.
+    Each error is also split along the model mesh's vertex normals: the normal part
+    is what a surface data term sees, the tangential part (vertices sliding along the
+    surface) is not determined by the surfaces; its circumferential share (about the
+    long axis) is where a twist shows.
 
     Parameters
     ----------
@@ -99,7 +109,9 @@ def recovery_errors(cohort: Cohort, corresponded: Cohort, transforms: dict, moti
     Returns
     -------
     dict
-        ``{subject: {"ed": rms, "es": rms, "rotation": degrees}}``.
+        ``{subject: {"ed": rms, "es": rms, "rotation": degrees, "ed_normal": rms,
+        "ed_tangential": rms, "ed_circumferential": rms, ...}}`` (the same three for
+        ``"es"``), in the cohort's unit.
     """
     from ..cohort.synthetic_lv import SyntheticLVModel, grid_shape, lv_grid, lv_shapes
 
@@ -113,10 +125,52 @@ def recovery_errors(cohort: Cohort, corresponded: Cohort, transforms: dict, moti
         truth_ed, truth_es = (x @ rz.T for x in lv_shapes(s.parameters, theta, phi - beta))
         c = by_name[s.name]
         fit = procrustes(truth_ed, c.ed)
-        rms = [float(np.sqrt(((fit.apply(t) - x) ** 2).sum(1).mean()))
-               for t, x in ((truth_ed, c.ed), (truth_es, c.es))]  # fmt: skip
-        out[s.name] = {"ed": rms[0], "es": rms[1], "rotation": float(np.degrees(beta))}
+        row = {"rotation": float(np.degrees(beta))}
+        for phase, truth, found in (("ed", truth_ed, c.ed), ("es", truth_es, c.es)):
+            parts = vertex_error_components(fit.apply(truth), found, cohort.faces)
+            row[phase] = parts.pop("total")
+            row.update({f"{phase}_{key}": value for key, value in parts.items()})
+        out[s.name] = row
     return out
+
+
+def vertex_error_components(truth, found, faces) -> dict:
+    """Per-vertex RMS of ``found - truth``, whole and split along the surface of ``truth``.
+
+    Parameters
+    ----------
+    truth, found : arrays, shape ``(k, 3)``
+        The true vertices and the recovered ones (same order).
+    faces : array, shape ``(f, 3)``
+        Triangles of ``truth`` (its vertex normals split the error).
+
+    Returns
+    -------
+    dict
+        ``total``; ``normal`` (along the vertex normals: what a surface data term
+        sees); ``tangential`` (sliding along the surface, not determined by the
+        surfaces); ``circumferential`` (the tangential part about the ``z`` axis
+        through the centroid, where a twist about the long axis shows). ``total^2 =
+        normal^2 + tangential^2``.
+    """
+    truth = np.asarray(truth, dtype=float)
+    err = np.asarray(found, dtype=float) - truth
+    normals = np.asarray(trimesh.Trimesh(truth, faces, process=False).vertex_normals)
+    along = (err * normals).sum(1)
+    tangential = err - along[:, None] * normals
+    centre = truth.mean(axis=0)
+    circ = np.stack([centre[1] - truth[:, 1], truth[:, 0] - centre[0], np.zeros(len(truth))], 1)
+    circ /= np.maximum(np.linalg.norm(circ, axis=1, keepdims=True), 1e-12)
+
+    def rms(v):
+        return float(np.sqrt((np.asarray(v) ** 2).reshape(len(truth), -1).sum(1).mean()))
+
+    return {
+        "total": rms(err),
+        "normal": rms(along),
+        "tangential": rms(tangential),
+        "circumferential": rms((tangential * circ).sum(1)),
+    }
 
 
 def procrustes_aligned(cohort: Cohort) -> list[Subject]:
