@@ -18,7 +18,7 @@ from manifolds.lddmm import (
 from manifolds.lddmm.control_points import resolve_control_points
 from manifolds.lddmm.flow_models import HamiltonianFlow, StationaryKernelFlow
 from manifolds.lddmm.joint_preconditioner import JointPreconditioner
-from manifolds.numerics.solvers import SOLVERS, StoppingRule, steihaug_cg
+from manifolds.numerics.solvers import SOLVERS, StoppingRule, krylov_lower_bound, steihaug_cg
 
 SIGMA = 0.6
 
@@ -163,3 +163,37 @@ def test_stopping_rule_rejects_unknown_kinds_and_describes_itself():
         StoppingRule("never")
     assert "shape" in StoppingRule("shape", shape_tol=1e-3).describe()
     assert "objective" in StoppingRule("objective").describe()
+
+
+def _spd(n, cond, rng):
+    q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    return (q * np.geomspace(1.0, cond, n)) @ q.T
+
+
+def test_krylov_bound_is_exact_after_as_many_products_as_distinct_eigenvalues():
+    rng = np.random.default_rng(0)
+    eigenvalues = np.repeat([1.0, 3.0, 10.0, 40.0], 5)  # 4 distinct values, n = 20
+    H, J = np.diag(eigenvalues), np.eye(20)
+    x0, x_star = rng.standard_normal(20), rng.standard_normal(20)
+    bound = krylov_lower_bound(H, J, x0, x_star)
+    assert len(bound.errors) == 4  # the Krylov spaces stop growing at dimension 4
+    assert bound.errors[2] > 1e-3 * bound.start_error
+    assert bound.errors[3] < 1e-10 * bound.start_error
+    assert bound.first_below(1e-8 * bound.start_error) == 4
+
+
+def test_krylov_bound_equals_cg_in_the_energy_norm_and_never_exceeds_it_otherwise():
+    rng = np.random.default_rng(1)
+    n = 30
+    H = _spd(n, 1e3, rng)
+    x0, x_star = rng.standard_normal(n), rng.standard_normal(n)
+    energy = np.linalg.cholesky(H).T  # J^T J = H: CG is optimal in |J e|
+    b = krylov_lower_bound(H, energy, x0, x_star, max_cg=12)
+    np.testing.assert_allclose(b.cg_errors[:12], b.errors[:12], rtol=1e-6)
+    J = rng.standard_normal((45, n))  # another output map: CG is no better than the bound
+    b = krylov_lower_bound(H, J, x0, x_star, n_points=15, max_cg=25)
+    assert np.all(b.errors[:25] <= b.cg_errors * (1 + 1e-9))
+    assert np.all(np.diff(b.errors) <= 1e-12)  # nested spaces: the bound never rises
+    assert b.cg_first_below(b.cg_errors[-1]) == 25
+    with pytest.raises(ValueError, match="H must be"):
+        krylov_lower_bound(H, J[:, :-1], x0, x_star)

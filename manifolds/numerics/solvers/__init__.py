@@ -7,6 +7,8 @@
 - :mod:`.lbfgsb`: scipy's L-BFGS-B (``"lbfgsb"``);
 - :mod:`.gauss_newton`: trust-region Gauss-Newton with matrix-free Steihaug-Toint CG
   (``"gauss-newton"``), for least-squares data terms;
+- :mod:`.krylov_bound`: the fewest products any Krylov-type solver needs on a
+  quadratic model (a lower bound to judge solvers by);
 - :mod:`.blas`: BLAS thread limits during a run.
 
 :data:`SOLVERS` maps a name (``RegistrationSettings.solver``) to a function
@@ -15,6 +17,7 @@
 
 from .blas import limit_blas_threads
 from .gauss_newton import minimize_gauss_newton, steihaug_cg
+from .krylov_bound import KrylovBound, krylov_lower_bound
 from .lbfgsb import minimize_lbfgsb
 from .result import OptimizationResult, SolverProblem
 from .stopping import StoppingRule, TraceRow
@@ -44,4 +47,6 @@ __all__ = [
     "minimize_gauss_newton",
     "steihaug_cg",
     "limit_blas_threads",
+    "KrylovBound",
+    "krylov_lower_bound",
 ]
