@@ -115,10 +115,15 @@ def krylov_lower_bound(
             break
         V[:, k] = w / norm
         size = k + 1
-    # nested spans: with J V = Q R, min_y |base + J V_k y|^2 = |base|^2 - |Q_k^T base|^2
+    # nested spans: with J V = Q R, min_y |base + J V_k y|^2 = |base - Q_k Q_k^T base|^2,
+    # the part of base outside span(Q) plus the components along Q_{k+1..size}: a sum of
+    # squares, summed from the smallest (|base|^2 - |Q_k^T base|^2 would lose all digits
+    # below sqrt(eps) |base| to cancellation)
     Q, _ = np.linalg.qr(J @ V[:, :size])
-    left = float(base @ base) - np.cumsum((Q.T @ base) ** 2)
-    errors = np.sqrt(np.maximum(left, 0.0) / n_points)
+    coef = Q.T @ base
+    outside = base - Q @ coef
+    tail = np.concatenate([np.cumsum((coef**2)[::-1])[::-1][1:], [0.0]])
+    errors = np.sqrt((float(outside @ outside) + tail) / n_points)
     # CG on H e = 0 from e0
     e, r = e0.copy(), -g0
     p = r.copy()
