@@ -28,7 +28,7 @@ Another preconditioner changes the Krylov space, and the bound with it; forming 
 factorising ``H`` itself costs ``2 n`` FE for ``n`` variables (1,620 FE on the
 270-point grid).
 
-Usage: ``python benchmarks/bench_krylov_bound.py [--settings sigma10,grid45]
+Usage: ``python benchmarks/bench_krylov_bound.py [--settings vertices10,sigma10,grid45]
 [--alpha2 0.01,0.1,1,100] [--subjects 0,1] [--cache out.json]``.
 """
 
@@ -43,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 SETTINGS = {
+    "vertices10": dict(sigma=10.0, control_points="vertices"),
     "sigma10": dict(sigma=10.0, control_points="grid"),
     "grid45": dict(sigma=20.0, control_points="grid"),
 }

@@ -37,6 +37,17 @@ SETTINGS = {
     "grid-1009": (1009, dict(sigma=20.0, control_points="grid")),
     "grid-sigma15-1009": (1009, dict(sigma=15.0, control_points="grid")),
     "grid-sigma10-1009": (1009, dict(sigma=10.0, control_points="grid")),
+    "vertices-sigma10-1009": (1009, dict(sigma=10.0, control_points="vertices")),
+    "vertices-sigma10-spacing5-1009": (
+        1009,
+        dict(sigma=10.0, control_points="vertices", control_point_spacing=5.0),
+    ),
+    "vertices-sigma10-spacing10-1009": (
+        1009,
+        dict(sigma=10.0, control_points="vertices", control_point_spacing=10.0),
+    ),
+    "vertices-sigma15-1009": (1009, dict(sigma=15.0, control_points="vertices")),
+    "vertices-sigma20-1009": (1009, dict(sigma=20.0, control_points="vertices")),
     "finegrid-1009": (1009, dict(sigma=20.0, control_points="finegrid")),
     "optimised-grid-241": (241, dict(sigma=20.0, optimize_control_points=True)),
     "optimised-grid-1009": (1009, dict(sigma=20.0, optimize_control_points=True)),

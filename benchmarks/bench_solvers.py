@@ -1,7 +1,8 @@
 """Solvers, stopping rules and starts of the registrations, on the study's own problems.
 
-For each control-point setting (45 fixed grid points at ``sigma = 20`` mm, the same
-45 optimised with the momenta, the 270-point grid at ``sigma = 10`` mm, dense), two
+For each control-point setting (the study's default: 143 points at the vertices,
+``sigma = 10`` mm; 45 fixed grid points at ``sigma = 20`` mm, the same 45 optimised
+with the momenta, the 270-point grid at ``sigma = 10`` mm, dense), two
 subjects of the built-in cohort (1,009 vertices) and ``alpha^2`` in {0.01, 1, 100},
 and for each combination of solver, stopping rule and start, it prints:
 
@@ -35,6 +36,7 @@ import numpy as np
 ALPHA2 = (0.01, 1.0, 100.0)
 SHAPE_TOL = 1e-4
 SETTINGS = {
+    "vertices10": dict(sigma=10.0, control_points="vertices"),
     "grid45": dict(sigma=20.0, control_points="grid"),
     "opt45": dict(sigma=20.0, control_points="grid", optimize_control_points=True),
     "sigma10": dict(sigma=10.0, control_points="grid"),
@@ -49,6 +51,9 @@ COMBOS = {
     ),
     "lbfgsb/shape/cold": (dict(solver="lbfgsb", stopping="shape", shape_tol=SHAPE_TOL), False),
     "lbfgsb/shape/warm": (dict(solver="lbfgsb", stopping="shape", shape_tol=SHAPE_TOL), True),
+    # the shape rule's tolerance a decade looser and a decade tighter
+    "lbfgsb/shape-1e-3/cold": (dict(solver="lbfgsb", stopping="shape", shape_tol=1e-3), False),
+    "lbfgsb/shape-1e-5/cold": (dict(solver="lbfgsb", stopping="shape", shape_tol=1e-5), False),
     "gauss-newton/shape/cold": (
         dict(solver="gauss-newton", stopping="shape", shape_tol=SHAPE_TOL),
         False,
@@ -166,6 +171,7 @@ def bench(args, cache: dict, save) -> list[dict]:
                             symmetry_deviation=_deviation(pair["cells"], ref["cells"], True),
                             cell_deviation=_deviation(pair["cells"], ref["cells"], False),
                             reference_pair_fe=ref["fe"],
+                            cells=pair["cells"],
                         )
                     rows.append(row)
                     print(_format(row), flush=True)
@@ -214,6 +220,30 @@ def summary(rows: list[dict]) -> list[str]:
                 f"{setting:8s} {combo:30s} {key}: {fe} ({fe_today / max(fe, 1):.2f}x fewer than "
                 f"{today}), worst cell deviation {worst:.2%}"
             )
+        out.extend(_tightening(mine))
+    return out
+
+
+def _tightening(rows: list[dict]) -> list[str]:
+    """Largest change of any pair cell when the shape rule is tightened tenfold."""
+    cells = {(r["combo"], r["alpha2"], r["subject"]): r["cells"] for r in rows if "cells" in r}
+    out = []
+    for loose, tight in (
+        ("lbfgsb/shape-1e-3/cold", "lbfgsb/shape/cold"),
+        ("lbfgsb/shape/cold", "lbfgsb/shape-1e-5/cold"),
+    ):
+        pairs = [
+            (k[1:], c, cells[(tight, *k[1:])])
+            for k, c in cells.items()
+            if k[0] == loose and (tight, *k[1:]) in cells
+        ]
+        if not pairs:
+            continue
+        worst = max(pairs, key=lambda p: _deviation(p[1], p[2], False))
+        out.append(
+            f"  {loose} -> {tight}: largest cell change {_deviation(worst[1], worst[2], False):.2%}"
+            f" (alpha^2 {worst[0][0]:g}, subject {worst[0][1]}) over {len(pairs)} pairs"
+        )
     return out
 
 

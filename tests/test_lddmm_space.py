@@ -145,18 +145,63 @@ def test_finegrid_policy_halves_the_spacing():
     np.testing.assert_allclose(steps, 0.15)
 
 
+def test_vertices_policy_is_a_spacing_net_of_the_template():
+    """Farthest-point sample: every vertex within the spacing of a control point, the
+    control points at least the spacing apart, rows of the template, deterministic."""
+    from manifolds.lddmm.control_points import farthest_point_indices
+
+    rng = np.random.default_rng(11)
+    t = rng.normal(size=(400, 3)) * np.array([3.0, 2.0, 1.0])
+    space = LDDMMLandmarks(400, 3, sigma=1.0, alpha=0.1, control_points="vertices")
+    cp = space.control_points(t)
+    spacing = 0.7  # VERTEX_SPACING * sigma
+    idx = farthest_point_indices(t, spacing)
+    np.testing.assert_array_equal(cp, t[idx])
+    assert np.all(np.diff(idx) > 0)
+    to_cp = np.sqrt(((t[:, None] - cp[None]) ** 2).sum(-1))
+    assert to_cp.min(axis=1).max() < spacing
+    between = np.sqrt(((cp[:, None] - cp[None]) ** 2).sum(-1)) + np.eye(len(cp)) * 1e9
+    assert between.min() >= spacing
+    np.testing.assert_array_equal(space.control_points(t.copy()), cp)
+    finer = space.settings.replace(control_point_spacing=0.35).resolve_control_points(t)
+    assert len(cp) < len(finer) < len(t)
+    tiny = space.settings.replace(control_point_spacing=1e-9).resolve_control_points(t)
+    np.testing.assert_array_equal(tiny, t)  # every vertex: the dense policy
+    huge = space.settings.replace(control_point_spacing=1e9).resolve_control_points(t)
+    assert huge.shape == (1, 3)
+
+
+def test_vertices_policy_registers_and_round_trips():
+    rng = np.random.default_rng(12)
+    t = rng.normal(size=(60, 2))
+    space = LDDMMLandmarks(60, 2, sigma=1.0, alpha=1e-2, control_points="vertices")
+    cp = space.control_points(t)
+    assert 1 < len(cp) < 60
+    mu = 0.3 * rng.normal(size=cp.shape)
+    s = space.exp(t, mu)
+    back = space.log(t, s)
+    np.testing.assert_allclose(space.exp(t, back), s, atol=2e-3)
+
+
 def test_study_preflight_budget_covers_the_finer_grid():
-    from ladders.study.cli.cli_types import check_grid_sigma
+    from ladders.study.cli.cli_types import check_sigma
     from manifolds.lddmm import RegistrationSettings
 
     def settings(sigma, policy):
         return RegistrationSettings(sigma=sigma, control_points=policy)
 
     shape = np.random.default_rng(0).uniform(0.0, 100.0, (50, 3))  # a 100 mm box
-    check_grid_sigma(shape, settings(5.0, "grid"))  # 21^3 = 9,261 points: within the budget
+    check_sigma(shape, settings(5.0, "grid"))  # 21^3 = 9,261 points: within the budget
     with pytest.raises(ManifoldError, match="sigma"):
-        check_grid_sigma(shape, settings(5.0, "finegrid"))  # spacing 2.5 mm: 41^3 = 68,921
-    check_grid_sigma(shape, settings(0.01, "dense"))  # no grid, nothing to check
+        check_sigma(shape, settings(5.0, "finegrid"))  # spacing 2.5 mm: 41^3 = 68,921
+    check_sigma(shape, settings(20.0, "dense"))  # no grid, nothing to count
+    check_sigma(shape, settings(20.0, "vertices"))  # at most the vertices
+    # a unit slip: sigma far below the vertex spacing or far above the extent
+    spacing = np.median(np.sort(np.sqrt(((shape[:, None] - shape[None]) ** 2).sum(-1)))[:, 1])
+    for sigma in (0.05 * spacing, 200.0 * 100.0):
+        for policy in ("dense", "vertices", "grid"):
+            with pytest.raises(ManifoldError, match="sigma.*another unit"):
+                check_sigma(shape, settings(sigma, policy))
 
 
 def test_dense_means_control_points_at_the_template_vertices_everywhere():

@@ -1,5 +1,6 @@
 """RegistrationSettings: validation, stable key, and the spaces' and study's use of it."""
 
+import hashlib
 import json
 import subprocess
 import sys
@@ -26,6 +27,7 @@ def test_key_changes_with_every_field_and_with_the_backend():
     changes = {
         "sigma": 2.0,
         "control_points": "grid",
+        "control_point_spacing": 0.5,
         "optimize_control_points": True,
         "integrator": "rk2",
         "n_steps": 11,
@@ -42,6 +44,27 @@ def test_key_changes_with_every_field_and_with_the_backend():
     assert base.replace(kernel_backend="numpy").key() != base.replace(kernel_backend="numba").key()
     # "auto" is resolved: it names the backend that runs
     assert base.key() == base.replace(kernel_backend=base.resolved_backend()).key()
+
+
+def test_key_leaves_out_the_spacing_while_it_is_the_default():
+    """Settings that do not set ``control_point_spacing`` keep the key they had before
+    the field existed (the study's result folders are named by it)."""
+    base = RegistrationSettings(sigma=20.0, control_points="grid", stopping="shape")
+    payload = base.as_dict()
+    del payload["control_point_spacing"]
+    payload.update(kernel_backend=base.resolved_backend(), schema=1)
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)
+    assert base.key() == hashlib.sha256(text.encode()).hexdigest()[:20]
+    assert base.replace(control_point_spacing=20.0).key() != base.key()
+
+
+def test_spacing_is_the_policy_default_unless_given():
+    s = RegistrationSettings(sigma=10.0, control_points="vertices")
+    assert s.spacing == pytest.approx(7.0)
+    assert s.replace(control_point_spacing=4.0).spacing == 4.0
+    assert s.replace(control_points="grid").spacing == 10.0
+    assert s.replace(control_points="finegrid").spacing == 5.0
+    assert s.replace(control_points="dense").spacing is None
 
 
 def test_key_is_stable_across_processes():
@@ -66,6 +89,8 @@ def test_array_policy_is_stored_as_a_tuple_and_given_back_as_an_array():
     [
         ({"sigma": 0.0}, "sigma"),
         ({"control_points": "sparse"}, "control_points"),
+        ({"control_point_spacing": 0.0}, "control_point_spacing"),
+        ({"control_point_spacing": float("inf")}, "control_point_spacing"),
         ({"control_points": np.zeros((2, 4))}, "control_points"),
         ({"integrator": "rk3"}, "integrator"),
         ({"solver": "bfgs"}, "solver"),

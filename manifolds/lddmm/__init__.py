@@ -25,7 +25,12 @@
   pole ladder on deformations given as flows.
 """
 
-from .control_points import POLICIES, grid_control_points, resolve_control_points
+from .control_points import (
+    POLICIES,
+    grid_control_points,
+    resolve_control_points,
+    vertex_control_points,
+)
 from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_jvp, shooting_vjp
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
@@ -80,6 +85,7 @@ __all__ = [
     "shooting_jvp",
     "POLICIES",
     "grid_control_points",
+    "vertex_control_points",
     "resolve_control_points",
     "SVFLandmarks",
     "StationaryFlow",

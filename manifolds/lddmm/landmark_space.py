@@ -24,7 +24,6 @@ from ..data_terms import DataTerm
 from ..errors import ManifoldError
 from ..numerics.integrators import get_integrator
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
-from .control_points import resolve_control_points
 from .inverse_consistency import inverse_consistency
 from .registration import RegistrationResult
 from .registration_cache import RegistrationCache, registration_key
@@ -203,14 +202,7 @@ class KernelLandmarkSpace(Connection):
     # ------------------------------------------------------------ building blocks
     def control_points(self, point) -> np.ndarray:
         """Control points ``c(T)`` of the template ``point``, shape ``(n_cp, d)``."""
-        point = self.check_point(point)
-        return resolve_control_points(
-            point,
-            self.control_points_policy,
-            self.sigma,
-            self.settings.auto_threshold,
-            self.settings.max_control_points,
-        )
+        return self.settings.resolve_control_points(self.check_point(point))
 
     def kernel_matrix(self, control_points) -> np.ndarray:
         """``K(c, c)``, shape ``(n_cp, n_cp)``."""

@@ -31,7 +31,7 @@ from manifolds.data_terms import DataTerm, SquaredDistance
 from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
 from ..numerics.solvers import StoppingRule, get_solver
-from .control_points import is_dense, resolve_control_points
+from .control_points import is_dense
 from .flow_models import FlowModel, HamiltonianFlow
 from .kernels import GaussianKernel
 from .preconditioner import IdentityPreconditioner, make_preconditioner
@@ -295,13 +295,7 @@ def build_registration_problem(
     template = np.asarray(template, dtype=float)
     data_term = as_data_term(target)
     if control_points is None:
-        control_points = resolve_control_points(
-            template,
-            settings.control_points_policy,
-            settings.sigma,
-            settings.auto_threshold,
-            settings.max_control_points,
-        )
+        control_points = settings.resolve_control_points(template)
     cp = np.asarray(control_points, dtype=float)
     dense = is_dense(template, cp)
     alpha = float(alpha)

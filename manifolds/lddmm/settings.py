@@ -32,7 +32,11 @@ SETTINGS_SCHEMA = 1
 #: entry (``ftol``, ``gtol``); ``"shape"``: the change of the deformed template and
 #: the gradient's predicted change in the shapes' unit (``shape_tol``).
 STOPPING_RULES = ("objective", "shape")
-_POLICIES = ("auto", "dense", "grid", "finegrid")
+_POLICIES = ("auto", "dense", "grid", "finegrid", "vertices")
+#: Fields left out of :meth:`RegistrationSettings.key` while they hold their default
+#: None, so that settings which do not use them keep the keys they had before the
+#: fields existed (and their cached results).
+_KEY_OPTIONAL = ("control_point_spacing",)
 _BACKENDS = ("auto", "numpy", "numba")
 
 
@@ -52,9 +56,13 @@ class RegistrationSettings:
     ----------
     sigma : float
         Width of the Gaussian kernel ``exp(-|x - y|^2 / sigma^2)``, in the shapes' unit.
-    control_points : {"auto", "dense", "grid", "finegrid"} or array ``(n_cp, d)``
+    control_points : {"auto", "dense", "grid", "finegrid", "vertices"} or array ``(n_cp, d)``
         Control-point policy (:mod:`manifolds.lddmm.control_points`); an array is
         stored as a tuple of tuples so that the settings stay hashable.
+    control_point_spacing : float or None
+        Spacing of the ``"grid"``, ``"finegrid"`` and ``"vertices"`` policies, in the
+        shapes' unit; None: the policy's default multiple of ``sigma`` (1, 1/2 and
+        :data:`~manifolds.lddmm.control_points.VERTEX_SPACING`).
     optimize_control_points : bool
         Minimise eq. (3) over the control points and the momenta jointly.
     control_point_scale : float or None
@@ -104,6 +112,7 @@ class RegistrationSettings:
 
     sigma: float
     control_points: Any = "auto"
+    control_point_spacing: float | None = None
     optimize_control_points: bool = False
     control_point_scale: float | None = None
     integrator: str | None = None
@@ -136,6 +145,17 @@ class RegistrationSettings:
             if not isinstance(value, bool | np.bool_):
                 raise ManifoldError(f"{name}: {flag}: expected True or False, got {value!r}")
             put(self, flag, bool(value))
+        if self.control_point_spacing is not None:
+            put(
+                self,
+                "control_point_spacing",
+                check_float(
+                    self.control_point_spacing,
+                    f"{name}: control_point_spacing",
+                    minimum=0.0,
+                    strict=True,
+                ),
+            )
         if self.control_point_scale is not None:
             put(
                 self,
@@ -195,6 +215,27 @@ class RegistrationSettings:
             return self.control_points
         return np.array(self.control_points, dtype=float)
 
+    @property
+    def spacing(self) -> float | None:
+        """Spacing between control points of the policy (in the shapes' unit), or None
+        for the policies without one (:func:`~manifolds.lddmm.control_points.policy_spacing`)."""
+        from .control_points import policy_spacing
+
+        return policy_spacing(self.control_points_policy, self.sigma, self.control_point_spacing)
+
+    def resolve_control_points(self, template: np.ndarray) -> np.ndarray:
+        """The control points of ``template`` ``(k, d)`` under these settings, ``(n_cp, d)``."""
+        from .control_points import resolve_control_points
+
+        return resolve_control_points(
+            template,
+            self.control_points_policy,
+            self.sigma,
+            self.auto_threshold,
+            self.max_control_points,
+            self.control_point_spacing,
+        )
+
     def resolved_backend(self) -> str:
         """The kernel backend that runs: ``"auto"`` resolved on this machine."""
         if self.kernel_backend != "auto":
@@ -244,6 +285,9 @@ class RegistrationSettings:
         last bit on the same machine and library version.
         """
         payload = self.as_dict()
+        for name in _KEY_OPTIONAL:
+            if payload[name] is None:
+                del payload[name]
         payload["kernel_backend"] = self.resolved_backend()
         payload["schema"] = SETTINGS_SCHEMA
         text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)

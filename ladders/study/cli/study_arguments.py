@@ -124,6 +124,7 @@ def _add_input_arguments(p) -> None:
 REGISTRATION_FLAGS = (
     "sigma",
     "control_points",
+    "control_point_spacing",
     "optimize_control_points",
     "integrator",
     "n_steps",
@@ -151,14 +152,23 @@ def _add_model_arguments(p) -> None:
     )
     p.add_argument(
         "--control-points",
-        choices=("grid", "finegrid", "dense"),
+        choices=("vertices", "grid", "finegrid", "dense"),
         default=d.control_points,
-        help="control points: grid of spacing sigma, of spacing sigma/2, or the mesh vertices",
+        help="control points: a subset of the atlas's vertices (farthest-point sample, spacing "
+        "0.7 sigma), a grid of spacing sigma or sigma/2 over its bounding box, or every vertex",
+    )
+    p.add_argument(
+        "--control-point-spacing",
+        type=positive_float,
+        default=d.control_point_spacing,
+        help="spacing of the 'vertices', 'grid' and 'finegrid' control points (mesh units); "
+        "default: the policy's multiple of sigma",
     )
     p.add_argument(
         "--optimize-control-points",
         action="store_true",
-        help="optimise the control points with the momenta (eq. 3), starting from the grid",
+        help="optimise the control points with the momenta (eq. 3), starting from the "
+        "--control-points policy",
     )
     p.add_argument(
         "--distance",

@@ -8,7 +8,7 @@ import time
 import warnings
 from pathlib import Path
 
-from .cli_types import DefaultsFormatter, UsageError, check_grid_sigma
+from .cli_types import DefaultsFormatter, UsageError, check_sigma
 from .preparation_arguments import units_usage_error
 from .study_arguments import (
     DEFAULT_ALPHA2,
@@ -282,7 +282,7 @@ def run_study_command(args) -> int:
         )
     configs = {model: _config(args, model) for model in models}
     for config in configs.values():  # the registration settings are the whole configuration
-        check_grid_sigma(cohort.atlas, config.registration)
+        check_sigma(cohort.atlas, config.registration)
     outcomes = {}
     for model, config in configs.items():
         folder = output / model if len(models) > 1 else output
