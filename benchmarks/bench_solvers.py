@@ -276,6 +276,7 @@ def plot(cache: dict, path: Path, settings, alpha2: float, subject: int = 0) -> 
         for ax, title in zip(axes[row], titles):
             ax.set_title(f"{setting}, alpha^2 = {alpha2:g}: {title}", fontsize=8)
             ax.set_xlabel("flow passes (FE)")
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         axes[row][2].axhline(SHAPE_TOL, color="k", ls=":", lw=0.8)
         axes[row][0].legend(fontsize=7)
     fig.tight_layout()

@@ -7,7 +7,7 @@ from ladders.pole_ladder import pole_ladder
 from ladders.schild_ladder import schild_ladder
 from ladders.symmetry_errors import symmetry_errors
 from manifolds.errors import ManifoldError
-from manifolds.lddmm import LDDMMLandmarks
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings
 from manifolds.testing import ConnectionContract
 
 
@@ -181,6 +181,46 @@ def test_vertices_policy_registers_and_round_trips():
     s = space.exp(t, mu)
     back = space.log(t, s)
     np.testing.assert_allclose(space.exp(t, back), s, atol=2e-3)
+
+
+def test_fixed_vertex_indices_are_material_control_points():
+    """With the sample drawn once (``control_point_indices``) every shape in
+    correspondence carries its momenta at the same vertices, and a geodesic carries
+    its control points exactly as it carries those vertices: the control points at
+    ``t = 1`` are the control points of ``Exp_T(mu)``."""
+    rng = np.random.default_rng(13)
+    t = rng.normal(size=(80, 3)) * np.array([3.0, 2.0, 1.0])
+    settings = RegistrationSettings(sigma=1.0, control_points="vertices")
+    fixed = settings.fix_control_point_indices(t)
+    idx = np.asarray(fixed.control_point_indices)
+    np.testing.assert_array_equal(
+        fixed.resolve_control_points(t), settings.resolve_control_points(t)
+    )
+    assert fixed.fix_control_point_indices(2.0 * t) is fixed  # already fixed: unchanged
+    space = LDDMMLandmarks(80, 3, alpha=0.1, settings=fixed)
+    mu = 0.3 * rng.normal(size=(len(idx), 3))
+    s = space.exp(t, mu)
+    np.testing.assert_array_equal(space.control_points(s), s[idx])
+    _, states = space.shoot(t, mu, return_trajectory=True)
+    c_end = states[-1][0]
+    np.testing.assert_allclose(c_end, s[idx], rtol=0, atol=1e-12)
+    with pytest.raises(ManifoldError, match="control_point_indices.*out of range"):
+        LDDMMLandmarks(int(idx.max()), 3, alpha=0.1, settings=fixed)
+
+
+def test_study_space_draws_the_vertex_sample_on_the_atlas():
+    from ladders.study.running import StudyConfig
+    from ladders.study.running.pipeline import make_space
+    from manifolds.lddmm.control_points import farthest_point_indices
+
+    atlas = np.random.default_rng(14).normal(size=(120, 3)) * 20.0
+    space = make_space(StudyConfig(), atlas, 1.0)
+    expected = farthest_point_indices(atlas, 7.0)  # 0.7 sigma at the default sigma = 10
+    np.testing.assert_array_equal(space.settings.control_point_indices, expected)
+    shape = 0.8 * atlas
+    np.testing.assert_array_equal(space.control_points(shape), shape[expected])
+    grid = make_space(StudyConfig.build(control_points="grid"), atlas, 1.0)
+    assert grid.settings.control_point_indices is None
 
 
 def test_study_preflight_budget_covers_the_finer_grid():

@@ -47,15 +47,24 @@ def test_key_changes_with_every_field_and_with_the_backend():
 
 
 def test_key_leaves_out_the_spacing_while_it_is_the_default():
-    """Settings that do not set ``control_point_spacing`` keep the key they had before
-    the field existed (the study's result folders are named by it)."""
+    """Settings that set neither ``control_point_spacing`` nor ``control_point_indices``
+    keep the key they had before the fields existed (the study's result folders are
+    named by it)."""
     base = RegistrationSettings(sigma=20.0, control_points="grid", stopping="shape")
     payload = base.as_dict()
-    del payload["control_point_spacing"]
+    del payload["control_point_spacing"], payload["control_point_indices"]
     payload.update(kernel_backend=base.resolved_backend(), schema=1)
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)
     assert base.key() == hashlib.sha256(text.encode()).hexdigest()[:20]
     assert base.replace(control_point_spacing=20.0).key() != base.key()
+
+
+def test_vertex_indices_round_trip_and_enter_the_key():
+    s = RegistrationSettings(sigma=10.0, control_points="vertices")
+    fixed = s.replace(control_point_indices=np.array([4, 1, 9]))
+    assert fixed.control_point_indices == (4, 1, 9)
+    assert RegistrationSettings.from_dict(json.loads(json.dumps(fixed.as_dict()))) == fixed
+    assert fixed.key() != s.key() != fixed.replace(control_point_indices=(4, 1, 8)).key()
 
 
 def test_spacing_is_the_policy_default_unless_given():
@@ -90,6 +99,11 @@ def test_array_policy_is_stored_as_a_tuple_and_given_back_as_an_array():
         ({"sigma": 0.0}, "sigma"),
         ({"control_points": "sparse"}, "control_points"),
         ({"control_point_spacing": 0.0}, "control_point_spacing"),
+        ({"control_point_indices": (0, 1)}, "control_point_indices"),  # not 'vertices'
+        ({"control_points": "vertices", "control_point_indices": (0, -1)}, "control_point_indices"),
+        ({"control_points": "vertices", "control_point_indices": (2, 2)}, "control_point_indices"),
+        ({"control_points": "vertices", "control_point_indices": (0.5,)}, "control_point_indices"),
+        ({"control_points": "vertices", "control_point_indices": ()}, "control_point_indices"),
         ({"control_point_spacing": float("inf")}, "control_point_spacing"),
         ({"control_points": np.zeros((2, 4))}, "control_points"),
         ({"integrator": "rk3"}, "integrator"),

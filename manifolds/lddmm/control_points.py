@@ -14,7 +14,8 @@ momenta:
 * ``"finegrid"``: the same with spacing ``sigma / 2`` (about 8 times as many points);
 * ``"vertices"``: a subset of the template's vertices, farthest-point sampled until
   every vertex lies within ``spacing`` (default ``VERTEX_SPACING * sigma``) of one
-  (:func:`vertex_control_points`). The points sit where the shape is, as dense
+  (:func:`vertex_control_points`), or given by their indices, the same for every
+  shape in correspondence (``indices``; the study draws them once, on the atlas). The points sit where the shape is, as dense
   control points do, at a density set by the kernel rather than by the mesh: a
   ventricle of 1,009 vertices gets 140 points at ``sigma = 10`` mm instead of 270 grid
   points, most of which a grid puts inside or outside the surface, where their
@@ -47,6 +48,7 @@ __all__ = [
     "grid_spacing",
     "policy_spacing",
     "vertex_control_points",
+    "vertices_at",
     "farthest_point_indices",
     "POLICIES",
     "VERTEX_SPACING",
@@ -212,6 +214,18 @@ def vertex_control_points(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.ascontiguousarray(points[farthest_point_indices(points, spacing)])
 
 
+def vertices_at(template: np.ndarray, indices) -> np.ndarray:
+    """Rows ``indices`` of ``template`` ``(k, d)``, a contiguous copy; a clear error if an
+    index is out of range."""
+    idx = np.asarray(indices, dtype=np.intp)
+    if idx.size and idx.max() >= template.shape[0]:
+        raise ManifoldError(
+            f"control_point_indices: vertex index {int(idx.max())} is out of range for a "
+            f"shape of {template.shape[0]} vertices"
+        )
+    return np.ascontiguousarray(template[idx])
+
+
 def resolve_control_points(
     template: np.ndarray,
     policy,
@@ -219,6 +233,7 @@ def resolve_control_points(
     auto_threshold: int = AUTO_THRESHOLD,
     max_points: int = MAX_CONTROL_POINTS,
     spacing: float | None = None,
+    indices=None,
 ) -> np.ndarray:
     """Control points for ``template`` under ``policy``.
 
@@ -236,6 +251,8 @@ def resolve_control_points(
     spacing : float, optional
         Spacing of the ``"grid"``, ``"finegrid"`` and ``"vertices"`` policies, in the
         shapes' unit (default: :func:`policy_spacing`).
+    indices : sequence of int, optional
+        With ``"vertices"``: the vertices to use (instead of a sample of ``template``).
 
     Returns
     -------
@@ -247,6 +264,8 @@ def resolve_control_points(
         if policy == "dense":
             return template
         if policy == "vertices":
+            if indices is not None:
+                return vertices_at(template, indices)
             return vertex_control_points(template, policy_spacing(policy, sigma, spacing))
         step = grid_spacing(policy, sigma, spacing)
         if step is not None:

@@ -114,6 +114,12 @@ class KernelLandmarkSpace(Connection):
             raise ManifoldError(
                 f"{name}: control_points must have shape (n_cp, {dim}), got {policy.shape}"
             )
+        indices = settings.control_point_indices
+        if indices is not None and max(indices) >= n_landmarks:
+            raise ManifoldError(
+                f"{name}: control_point_indices: vertex index {max(indices)} is out of range "
+                f"for shapes of {n_landmarks} landmarks"
+            )
         self.settings = settings
         self.kernel = settings.make_kernel(block_size)
         self.integrator = get_integrator(settings.integrator)

@@ -36,7 +36,7 @@ _POLICIES = ("auto", "dense", "grid", "finegrid", "vertices")
 #: Fields left out of :meth:`RegistrationSettings.key` while they hold their default
 #: None, so that settings which do not use them keep the keys they had before the
 #: fields existed (and their cached results).
-_KEY_OPTIONAL = ("control_point_spacing",)
+_KEY_OPTIONAL = ("control_point_spacing", "control_point_indices")
 _BACKENDS = ("auto", "numpy", "numba")
 
 
@@ -63,6 +63,12 @@ class RegistrationSettings:
         Spacing of the ``"grid"``, ``"finegrid"`` and ``"vertices"`` policies, in the
         shapes' unit; None: the policy's default multiple of ``sigma`` (1, 1/2 and
         :data:`~manifolds.lddmm.control_points.VERTEX_SPACING`).
+    control_point_indices : tuple of int or None
+        With the ``"vertices"`` policy: the indices of the vertices that carry the
+        momenta, the same for every shape (landmarks in correspondence), so that the
+        control points are material points that move with the shapes. None: a
+        farthest-point sample of each template itself.
+        :meth:`fix_control_point_indices` draws them from a reference shape.
     optimize_control_points : bool
         Minimise eq. (3) over the control points and the momenta jointly.
     control_point_scale : float or None
@@ -113,6 +119,7 @@ class RegistrationSettings:
     sigma: float
     control_points: Any = "auto"
     control_point_spacing: float | None = None
+    control_point_indices: tuple | None = None
     optimize_control_points: bool = False
     control_point_scale: float | None = None
     integrator: str | None = None
@@ -145,28 +152,11 @@ class RegistrationSettings:
             if not isinstance(value, bool | np.bool_):
                 raise ManifoldError(f"{name}: {flag}: expected True or False, got {value!r}")
             put(self, flag, bool(value))
-        if self.control_point_spacing is not None:
-            put(
-                self,
-                "control_point_spacing",
-                check_float(
-                    self.control_point_spacing,
-                    f"{name}: control_point_spacing",
-                    minimum=0.0,
-                    strict=True,
-                ),
-            )
-        if self.control_point_scale is not None:
-            put(
-                self,
-                "control_point_scale",
-                check_float(
-                    self.control_point_scale,
-                    f"{name}: control_point_scale",
-                    minimum=0.0,
-                    strict=True,
-                ),
-            )
+        for key in ("control_point_spacing", "control_point_scale"):  # optional, > 0
+            if getattr(self, key) is not None:
+                put(self, key, check_float(getattr(self, key), f"{name}: {key}", 0.0, strict=True))
+        if self.control_point_indices is not None:
+            put(self, "control_point_indices", self._check_indices(self.control_point_indices))
         if self.integrator is not None:
             from ..numerics.integrators import INTEGRATORS, Integrator
 
@@ -207,6 +197,27 @@ class RegistrationSettings:
             )
         return tuple(tuple(float(v) for v in row) for row in arr)
 
+    def _check_indices(self, indices) -> tuple:
+        field_name = "RegistrationSettings: control_point_indices"
+        if self.control_points != "vertices":
+            raise ManifoldError(
+                f"{field_name}: given with the control-point policy "
+                f"{self.control_points if isinstance(self.control_points, str) else 'array'!r}; "
+                "vertex indices belong to the 'vertices' policy"
+            )
+        arr = np.asarray(indices)
+        if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
+            raise ManifoldError(
+                f"{field_name}: expected a non-empty sequence of integers, got "
+                f"{arr.dtype} array of shape {arr.shape}"
+            )
+        if arr.min() < 0 or np.unique(arr).size != arr.size:
+            raise ManifoldError(
+                f"{field_name}: expected distinct non-negative vertex indices, got "
+                f"min {int(arr.min())} and {arr.size - np.unique(arr).size} repeated"
+            )
+        return tuple(int(i) for i in arr)
+
     # ------------------------------------------------------------ derived
     @property
     def control_points_policy(self):
@@ -234,7 +245,23 @@ class RegistrationSettings:
             self.auto_threshold,
             self.max_control_points,
             self.control_point_spacing,
+            self.control_point_indices,
         )
+
+    def fix_control_point_indices(self, reference: np.ndarray) -> RegistrationSettings:
+        """These settings with the ``"vertices"`` sample drawn once, on ``reference``.
+
+        The farthest-point sample of ``reference`` ``(k, d)`` at the policy's spacing
+        becomes :attr:`control_point_indices`: every shape in correspondence with
+        ``reference`` then carries its momenta at the same vertices. Settings of another
+        policy, or whose indices are already fixed, are returned unchanged.
+        """
+        if self.control_points != "vertices" or self.control_point_indices is not None:
+            return self
+        from .control_points import farthest_point_indices
+
+        indices = farthest_point_indices(np.asarray(reference, dtype=float), self.spacing)
+        return self.replace(control_point_indices=tuple(int(i) for i in indices))
 
     def resolved_backend(self) -> str:
         """The kernel backend that runs: ``"auto"`` resolved on this machine."""
@@ -265,6 +292,8 @@ class RegistrationSettings:
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         if not isinstance(self.control_points, str):
             out["control_points"] = [list(row) for row in self.control_points]
+        if self.control_point_indices is not None:
+            out["control_point_indices"] = list(self.control_point_indices)
         return out
 
     @classmethod

@@ -155,7 +155,8 @@ def _add_model_arguments(p) -> None:
         choices=("vertices", "grid", "finegrid", "dense"),
         default=d.control_points,
         help="control points: a subset of the atlas's vertices (farthest-point sample, spacing "
-        "0.7 sigma), a grid of spacing sigma or sigma/2 over its bounding box, or every vertex",
+        "0.7 sigma), the same vertices on every shape; a grid of spacing sigma or sigma/2 "
+        "over each shape's bounding box; or every vertex",
     )
     p.add_argument(
         "--control-point-spacing",

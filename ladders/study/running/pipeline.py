@@ -71,9 +71,9 @@ UNITS = {
 
 
 #: Registration settings of the default study (``docs/study.md``, "Settings chosen by
-#: measurement"): a kernel of width ``sigma = 10`` mm on control points at the base
-#: shape's vertices, farthest-point sampled at a spacing of ``0.7 sigma`` (143 points on
-#: the built-in atlas), 10 Euler steps, L-BFGS-B stopped when the deformed template
+#: measurement"): a kernel of width ``sigma = 10`` mm on control points at the shapes'
+#: vertices, a farthest-point sample of the atlas at a spacing of ``0.7 sigma`` (143
+#: points on the built-in atlas) used on every shape, 10 Euler steps, L-BFGS-B stopped when the deformed template
 #: moves by less than 1e-4 mm (per-vertex RMS) per iteration.
 DEFAULT_REGISTRATION = RegistrationSettings(
     sigma=10.0,
@@ -161,7 +161,14 @@ class StudyConfig:
 
 
 def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
-    """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``."""
+    """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``.
+
+    With the ``"vertices"`` policy the sample of vertices is drawn once, on
+    ``template`` (the atlas), and used for every shape of the study
+    (:meth:`~manifolds.lddmm.RegistrationSettings.fix_control_point_indices`): the
+    control points are the same material points on ``T``, ``S``, ``S'``, ``M`` and
+    the reflected shapes.
+    """
     spaces = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
     if config.deformation not in spaces:
         raise ValueError(
@@ -172,7 +179,7 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
         n_landmarks=k,
         dim=d,
         alpha=float(np.sqrt(alpha2)),
-        settings=config.registration,
+        settings=config.registration.fix_control_point_indices(template),
     )
 
 
