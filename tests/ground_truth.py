@@ -23,7 +23,7 @@ from ladders.study.reporting import summarize
 N_SUBJECTS, N_VERTICES, SEED = 3, 150, 0
 IN_METRES = "synthetic_001"
 ALPHA2 = (1.0, 1089.0)
-SIGMA, MAX_ITER = 20.0, 1000  # the study's kernel width and iteration limit here
+SIGMA, MAX_ITER = 10.0, 1000  # the study's default kernel width; iteration limit here
 #: The study's flags for these settings (``symladders study``).
 STUDY_FLAGS = ["--sigma", str(SIGMA), "--max-iter", str(MAX_ITER),
                "--alpha2", ",".join(f"{a:g}" for a in ALPHA2)]  # fmt: skip
@@ -69,12 +69,13 @@ def table_from_csv(path) -> dict:
 
 
 def assert_reproduces_table_1(reference: dict, found: dict) -> None:
-    """10 % at the PDM limit, 25 % at alpha^2 = 1 (cells above 1e-3), and the paper's
-    claims on both: (a) residuals lower centrality and involutivity; (b) the
-    registration error rises and the norm falls with alpha^2."""
+    """Every cell above 1e-3 mm within 10 % (the issue's target; 3 % was measured at
+    these settings), and the paper's claims on both: (a) residuals lower centrality
+    and involutivity; (b) the registration error rises and the norm falls with
+    alpha^2."""
     rel = {k: found[k] / reference[k] - 1 for k in TABLE1 if reference[k] > 1e-3}
-    assert all(abs(rel[k]) < 0.10 for k in rel if k[0] == 1089.0), rel
-    assert all(abs(rel[k]) < 0.25 for k in rel), rel
+    assert len(rel) >= 14, rel
+    assert all(abs(rel[k]) < 0.10 for k in rel), rel
     for t in (reference, found):
         for a in ALPHA2:
             for m in ("centrality", "involutivity"):
