@@ -15,11 +15,12 @@ momenta:
 * ``"vertices"``: a subset of the template's vertices, farthest-point sampled until
   every vertex lies within ``spacing`` (default ``VERTEX_SPACING * sigma``) of one
   (:func:`vertex_control_points`), or given by their indices, the same for every
-  shape in correspondence (``indices``; the study draws them once, on the atlas). The points sit where the shape is, as dense
-  control points do, at a density set by the kernel rather than by the mesh: a
-  ventricle of 1,009 vertices gets 140 points at ``sigma = 10`` mm instead of 270 grid
-  points, most of which a grid puts inside or outside the surface, where their
-  fields nearly cancel on it (``docs/lddmm.md``, "Control points");
+  shape in correspondence (``indices``; the study draws them once, on the atlas).
+  The points sit where the shape is, as dense control points do, at a density set
+  by the kernel rather than by the mesh: a ventricle of 1,009 vertices gets 143
+  points at ``sigma = 10`` mm instead of 270 grid points, most of which a grid puts
+  inside or outside the surface, where their fields nearly cancel on it
+  (``docs/lddmm.md``, "Control points");
 * ``"auto"``: dense up to ``auto_threshold`` vertices, grid above;
 * an array of shape ``(n_cp, d)``: the same user-given points for every template.
 

@@ -73,8 +73,9 @@ UNITS = {
 #: Registration settings of the default study (``docs/study.md``, "Settings chosen by
 #: measurement"): a kernel of width ``sigma = 10`` mm on control points at the shapes'
 #: vertices, a farthest-point sample of the atlas at a spacing of ``0.7 sigma`` (143
-#: points on the built-in atlas) used on every shape, 10 Euler steps, L-BFGS-B stopped when the deformed template
-#: moves by less than 1e-4 mm (per-vertex RMS) per iteration.
+#: points on the built-in atlas) used on every shape (:func:`make_space`), 10 Euler
+#: steps, L-BFGS-B stopped when the deformed template moves by less than 1e-4 mm
+#: (per-vertex RMS) per iteration.
 DEFAULT_REGISTRATION = RegistrationSettings(
     sigma=10.0,
     control_points="vertices",
