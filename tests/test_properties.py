@@ -175,3 +175,28 @@ def test_lddmm_exp_log_round_trip_few_landmarks():
         np.testing.assert_allclose(space.symmetry(t, t), t, rtol=0, atol=1e-12)
 
     run(3, check)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=SEEDS,
+    k=st.integers(1, 300),
+    dim=st.sampled_from([2, 3]),
+    spacing=st.floats(0.05, 3.0),
+)
+def test_farthest_point_sample_is_a_spacing_net(seed, k, dim, spacing):
+    """Every point within ``spacing`` of the sample, the sample's points at least
+    ``spacing`` apart, sorted distinct indices, the same sample for the same points."""
+    from manifolds.lddmm.control_points import farthest_point_indices
+
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(k, dim)) * rng.uniform(0.1, 5.0, size=dim)
+    idx = farthest_point_indices(points, spacing)
+    assert idx.ndim == 1 and 1 <= idx.size <= k
+    assert np.all(np.diff(idx) > 0)
+    to_sample = np.sqrt(((points[:, None] - points[idx][None]) ** 2).sum(-1)).min(axis=1)
+    assert to_sample.max() < spacing
+    if idx.size > 1:
+        between = np.sqrt(((points[idx][:, None] - points[idx][None]) ** 2).sum(-1))
+        assert between[~np.eye(idx.size, dtype=bool)].min() >= spacing
+    np.testing.assert_array_equal(farthest_point_indices(points.copy(), spacing), idx)
