@@ -50,6 +50,7 @@ __all__ = [
     "policy_spacing",
     "vertex_control_points",
     "vertices_at",
+    "check_vertex_indices",
     "farthest_point_indices",
     "POLICIES",
     "VERTEX_SPACING",
@@ -215,16 +216,22 @@ def vertex_control_points(points: np.ndarray, spacing: float) -> np.ndarray:
     return np.ascontiguousarray(points[farthest_point_indices(points, spacing)])
 
 
-def vertices_at(template: np.ndarray, indices) -> np.ndarray:
-    """Rows ``indices`` of ``template`` ``(k, d)``, a contiguous copy; a clear error if an
-    index is out of range."""
+def check_vertex_indices(indices, n_vertices: int, label: str = "") -> np.ndarray:
+    """``indices`` as an int array; a :class:`ManifoldError` (prefixed by ``label``)
+    if one of them is out of range for shapes of ``n_vertices`` vertices."""
     idx = np.asarray(indices, dtype=np.intp)
-    if idx.size and idx.max() >= template.shape[0]:
+    if idx.size and idx.max() >= n_vertices:
         raise ManifoldError(
-            f"control_point_indices: vertex index {int(idx.max())} is out of range for a "
-            f"shape of {template.shape[0]} vertices"
+            f"{label}control_point_indices: vertex index {int(idx.max())} is out of range "
+            f"for shapes of {n_vertices} vertices"
         )
-    return np.ascontiguousarray(template[idx])
+    return idx
+
+
+def vertices_at(template: np.ndarray, indices) -> np.ndarray:
+    """Rows ``indices`` of ``template`` ``(k, d)``, a contiguous copy
+    (:func:`check_vertex_indices` first)."""
+    return np.ascontiguousarray(template[check_vertex_indices(indices, template.shape[0])])
 
 
 def resolve_control_points(

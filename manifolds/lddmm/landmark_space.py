@@ -24,6 +24,7 @@ from ..data_terms import DataTerm
 from ..errors import ManifoldError
 from ..numerics.integrators import get_integrator
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
+from .control_points import check_vertex_indices
 from .inverse_consistency import inverse_consistency
 from .registration import RegistrationResult
 from .registration_cache import RegistrationCache, registration_key
@@ -114,12 +115,8 @@ class KernelLandmarkSpace(Connection):
             raise ManifoldError(
                 f"{name}: control_points must have shape (n_cp, {dim}), got {policy.shape}"
             )
-        indices = settings.control_point_indices
-        if indices is not None and max(indices) >= n_landmarks:
-            raise ManifoldError(
-                f"{name}: control_point_indices: vertex index {max(indices)} is out of range "
-                f"for shapes of {n_landmarks} landmarks"
-            )
+        if settings.control_point_indices is not None:
+            check_vertex_indices(settings.control_point_indices, n_landmarks, f"{name}: ")
         self.settings = settings
         self.kernel = settings.make_kernel(block_size)
         self.integrator = get_integrator(settings.integrator)
