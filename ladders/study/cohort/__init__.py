@@ -5,14 +5,20 @@
 - :mod:`.mesh_folder`: a folder of mesh files (:func:`read_cohort`, :func:`write_cohort`);
 - :mod:`.cohort_table`: a CSV table of subjects (:func:`read_cohort_table`);
 - :mod:`.cohort_statistics`: anatomical figures of a cohort (:func:`cohort_statistics`);
-- :mod:`.benchmark_shapes`: the registration benchmark's shapes (:func:`bent_ellipsoid`).
+- :mod:`.benchmark_shapes`: the registration benchmark's shapes (:func:`bent_ellipsoid`);
+- :mod:`.aha_segments`: the AHA 17-segment model on the synthetic ventricle;
+- :mod:`.planted_effect`: a regional motion abnormality and its ground truth on the atlas;
+- :mod:`.segmentation_noise`: smooth random normal displacements of a surface;
+- :mod:`.groups_table`: the ``subject,group`` table.
 """
 
 from ..errors import CohortError, MeshFolderError, MissingAtlasError
+from .aha_segments import AHA_SEGMENTS, segment_of, segment_weights
 from .benchmark_shapes import bent_ellipsoid
 from .cohort import Cohort, Subject
 from .cohort_statistics import CohortStatistics, cohort_statistics
 from .cohort_table import read_cohort_table
+from .groups_table import groups_csv, read_groups
 from .mesh_folder import (
     UnusedMeshFilesWarning,
     assemble_cohort,
@@ -20,7 +26,20 @@ from .mesh_folder import (
     warn_unused,
     write_cohort,
 )
-from .synthetic_lv import SubjectParameters, SyntheticLVModel, make_synthetic_cohort
+from .planted_effect import (
+    EFFECT_KINDS,
+    MotionAbnormality,
+    PlantedRegion,
+    planted_modulation,
+    planted_region,
+)
+from .segmentation_noise import smooth_normal_noise
+from .synthetic_lv import (
+    MotionModulation,
+    SubjectParameters,
+    SyntheticLVModel,
+    make_synthetic_cohort,
+)
 
 __all__ = [
     "Cohort",
@@ -40,4 +59,16 @@ __all__ = [
     "CohortStatistics",
     "cohort_statistics",
     "bent_ellipsoid",
+    "AHA_SEGMENTS",
+    "segment_of",
+    "segment_weights",
+    "EFFECT_KINDS",
+    "MotionAbnormality",
+    "MotionModulation",
+    "PlantedRegion",
+    "planted_modulation",
+    "planted_region",
+    "smooth_normal_noise",
+    "groups_csv",
+    "read_groups",
 ]

@@ -20,6 +20,7 @@ from .cohort import Cohort, CohortError, Subject
 __all__ = [
     "SyntheticLVModel",
     "SubjectParameters",
+    "MotionModulation",
     "grid_shape",
     "lv_grid",
     "lv_shapes",
@@ -193,8 +194,35 @@ def lv_grid(
     return theta, phi, np.concatenate(tris).astype(np.int64)
 
 
+@dataclass(frozen=True)
+class MotionModulation:
+    """Per-vertex changes of the end-systolic motion (a regional abnormality).
+
+    Each array has one value per vertex of the grid, shape ``(k,)``. The
+    end-systolic motion of :func:`lv_shapes` becomes, at every vertex,
+    ``r -> radial * r``, ``l -> longitudinal * l`` and ``psi -> psi + twist``:
+    ``radial = longitudinal = 1`` and ``twist = 0`` leave the motion unchanged.
+
+    Attributes
+    ----------
+    radial : ndarray, shape (k,)
+        Factor of the radial contraction (dimensionless; 0 is akinetic).
+    longitudinal : ndarray, shape (k,)
+        Factor of the longitudinal shortening (dimensionless).
+    twist : ndarray, shape (k,)
+        Rotation about the long axis added to ``psi``, in degrees.
+    """
+
+    radial: np.ndarray
+    longitudinal: np.ndarray
+    twist: np.ndarray
+
+
 def lv_shapes(
-    params: SubjectParameters, theta: np.ndarray, phi: np.ndarray
+    params: SubjectParameters,
+    theta: np.ndarray,
+    phi: np.ndarray,
+    modulation: MotionModulation | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """End-diastole and end-systole vertices of one subject on a parametric grid.
 
@@ -212,6 +240,9 @@ def lv_shapes(
     params : SubjectParameters
     theta, phi : ndarray, shape (k,)
         Parametric coordinates from :func:`lv_grid`.
+    modulation : MotionModulation, optional
+        A regional change of the end-systolic motion (the end-diastolic shape is
+        unchanged); see :mod:`ladders.study.cohort.planted_effect`.
 
     Returns
     -------
@@ -233,13 +264,19 @@ def lv_shapes(
         * (1.0 + params.contraction_heterogeneity * np.cos(phi - params.heterogeneity_phase))
         * (1.0 + params.contraction_gradient * (1.0 - 2.0 * u))
     )
-    psi = np.deg2rad(params.apex_rotation * (1.0 - u) - params.base_rotation * u)
+    shortening = np.full_like(z, params.longitudinal_shortening)
+    psi_deg = params.apex_rotation * (1.0 - u) - params.base_rotation * u
+    if modulation is not None:
+        r = r * modulation.radial
+        shortening = shortening * modulation.longitudinal
+        psi_deg = psi_deg + modulation.twist
+    psi = np.deg2rad(psi_deg)
     rho_es = (1.0 - r) * rho
     es = np.stack(
         [
             rho_es * np.cos(phi + psi),
             rho_es * np.sin(phi + psi),
-            (1.0 - params.longitudinal_shortening) * z,
+            (1.0 - shortening) * z,
         ],
         axis=-1,
     )

@@ -1,0 +1,210 @@
+"""A regional motion abnormality planted in chosen subjects of the synthetic cohort.
+
+:class:`MotionAbnormality` describes a change of the end-systolic motion in named
+AHA segments (:mod:`ladders.study.cohort.aha_segments`): a reduced radial
+contraction and longitudinal shortening (hypokinesia, which a surface shows) or a
+change of twist (a rotation about the long axis, tangential to the wall of a
+ventricle of revolution, which a surface without material landmarks cannot
+show). :func:`planted_modulation` turns it into the per-vertex
+:class:`~ladders.study.cohort.synthetic_lv.MotionModulation` of
+:func:`~ladders.study.cohort.synthetic_lv.lv_shapes`, and
+:func:`planted_region` into the ground truth on the atlas: the weight of the
+abnormality at every vertex and the affected vertices (weight >= 0.5, i.e. inside
+the named segments' boundaries).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from ..errors import CohortError
+from .aha_segments import AHA_SEGMENTS, check_segments, segment_weights
+from .synthetic_lv import MotionModulation
+
+__all__ = [
+    "EFFECT_KINDS",
+    "DEFAULT_MAGNITUDE",
+    "MotionAbnormality",
+    "PlantedRegion",
+    "planted_modulation",
+    "planted_region",
+]
+
+#: The kinds of abnormality: what each changes and whether a surface shows it.
+EFFECT_KINDS = {
+    "hypokinesia": "radial contraction and longitudinal shortening reduced (a surface shows it)",
+    "radial": "radial contraction reduced (a surface shows it)",
+    "longitudinal": "longitudinal shortening reduced (a surface shows it)",
+    "twist": "rotation about the long axis changed (tangential: a surface does not show it)",
+}
+
+#: Magnitude of each kind when none is given: half the motion, or 5 degrees of twist.
+DEFAULT_MAGNITUDE = {"hypokinesia": 0.5, "radial": 0.5, "longitudinal": 0.5, "twist": 5.0}
+
+
+@dataclass(frozen=True)
+class MotionAbnormality:
+    """A regional change of the end-systolic motion, of controllable magnitude and extent.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`EFFECT_KINDS`: ``"hypokinesia"`` (default: radial contraction
+        and longitudinal shortening both reduced), ``"radial"``, ``"longitudinal"``
+        or ``"twist"``.
+    segments : tuple of int
+        The AHA segments affected (1..17); default the mid and apical anterior and
+        (antero)septal segments 7, 8, 13 and 14, a mid-to-distal left anterior
+        descending artery territory.
+    magnitude : float
+        For ``"hypokinesia"``, ``"radial"`` and ``"longitudinal"``: the fraction by
+        which the motion is reduced inside the segments (dimensionless, 0 to 1; 1
+        is akinetic); default 0.5. For ``"twist"``: the rotation added about the
+        long axis, in degrees (counterclockwise seen from the base is negative,
+        the model's convention for ``psi``); default 5.
+    transition_height : float
+        Half-width of the smooth transition across ring boundaries, as a fraction
+        of the long axis (default 0.05).
+    transition_angle : float
+        Half-width of the transition across sector boundaries, in degrees (default 10).
+    """
+
+    kind: str = "hypokinesia"
+    segments: tuple = (7, 8, 13, 14)
+    magnitude: float | None = None
+    transition_height: float = 0.05
+    transition_angle: float = 10.0
+
+    def __post_init__(self):
+        if self.kind not in EFFECT_KINDS:
+            raise CohortError(
+                f"MotionAbnormality.kind: expected one of {sorted(EFFECT_KINDS)}, got {self.kind!r}"
+            )
+        object.__setattr__(
+            self, "segments", check_segments(self.segments, "MotionAbnormality.segments")
+        )
+        magnitude = self.magnitude
+        if magnitude is None:
+            magnitude = DEFAULT_MAGNITUDE.get(self.kind, 0.5)
+        magnitude = float(magnitude)
+        if not np.isfinite(magnitude):
+            raise CohortError(
+                f"MotionAbnormality.magnitude: expected a finite number, got {magnitude}"
+            )
+        if self.kind != "twist" and not 0.0 <= magnitude <= 1.0:
+            raise CohortError(
+                f"MotionAbnormality.magnitude: a fraction of the motion in [0, 1] for {self.kind!r}, "
+                f"got {magnitude}"
+            )
+        object.__setattr__(self, "magnitude", magnitude)
+        for name in ("transition_height", "transition_angle"):
+            value = float(getattr(self, name))
+            if not np.isfinite(value) or value < 0:
+                raise CohortError(f"MotionAbnormality.{name}: expected a number >= 0, got {value}")
+            object.__setattr__(self, name, value)
+
+    @property
+    def unit(self) -> str:
+        """Unit of :attr:`magnitude`."""
+        return "degrees" if self.kind == "twist" else "fraction of the motion"
+
+    @property
+    def surface_visible(self) -> bool:
+        """Whether a surface without material landmarks shows the change (not for a twist)."""
+        return self.kind != "twist"
+
+    def describe(self) -> str:
+        """One line: the kind, the magnitude with its unit and the segments by name."""
+        names = ", ".join(f"{n} ({AHA_SEGMENTS[n][0]} {AHA_SEGMENTS[n][1]})" for n in self.segments)
+        return f"{self.kind}, magnitude {self.magnitude:g} {self.unit}, segments {names}"
+
+    def as_dict(self) -> dict:
+        """JSON-ready fields."""
+        out = asdict(self)
+        out["segments"] = list(self.segments)
+        out["unit"] = self.unit
+        out["surface_visible"] = self.surface_visible
+        return out
+
+
+@dataclass(frozen=True)
+class PlantedRegion:
+    """The ground truth of an abnormality on the atlas.
+
+    Attributes
+    ----------
+    weight : ndarray, shape (k,)
+        The abnormality's weight at every atlas vertex, in ``[0, 1]``.
+    affected : ndarray of bool, shape (k,)
+        The affected vertices: ``weight >= 0.5``.
+    abnormality : MotionAbnormality
+    """
+
+    weight: np.ndarray
+    affected: np.ndarray
+    abnormality: MotionAbnormality
+
+    def as_dict(self) -> dict:
+        """JSON-ready: the abnormality, the weights and the indices of the affected vertices."""
+        return {
+            "abnormality": self.abnormality.as_dict(),
+            "n_vertices": int(self.weight.size),
+            "affected_vertices": np.flatnonzero(self.affected).tolist(),
+            "weight": self.weight.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, data: dict) -> PlantedRegion:
+        """Read back :meth:`as_dict` (raises :class:`CohortError` on a malformed record)."""
+        try:
+            fields = dict(data["abnormality"])
+            abnormality = MotionAbnormality(
+                kind=fields["kind"],
+                segments=tuple(fields["segments"]),
+                magnitude=fields["magnitude"],
+                transition_height=fields["transition_height"],
+                transition_angle=fields["transition_angle"],
+            )
+            weight = np.asarray(data["weight"], dtype=float)
+            n = int(data["n_vertices"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CohortError(f"planted region: malformed record ({exc})") from None
+        if weight.shape != (n,) or not np.isfinite(weight).all():
+            raise CohortError(f"planted region: expected {n} finite weights, got {weight.shape}")
+        return cls(weight, weight >= 0.5, abnormality)
+
+
+def planted_modulation(
+    abnormality: MotionAbnormality, theta: np.ndarray, phi: np.ndarray
+) -> MotionModulation:
+    """The per-vertex change of motion of ``abnormality`` on the grid ``(theta, phi)``."""
+    w = segment_weights(
+        theta,
+        phi,
+        abnormality.segments,
+        abnormality.transition_height,
+        abnormality.transition_angle,
+    )
+    one = np.ones_like(w)
+    reduce = 1.0 - abnormality.magnitude * w
+    kind = abnormality.kind
+    radial = reduce if kind in ("hypokinesia", "radial") else one
+    longitudinal = reduce if kind in ("hypokinesia", "longitudinal") else one
+    twist = abnormality.magnitude * w if kind == "twist" else np.zeros_like(w)
+    return MotionModulation(radial=radial, longitudinal=longitudinal, twist=twist)
+
+
+def planted_region(
+    abnormality: MotionAbnormality, theta: np.ndarray, phi: np.ndarray
+) -> PlantedRegion:
+    """The ground truth of ``abnormality`` at the vertices ``(theta, phi)`` (the atlas's grid)."""
+    w = segment_weights(
+        theta,
+        phi,
+        abnormality.segments,
+        abnormality.transition_height,
+        abnormality.transition_angle,
+    )
+    return PlantedRegion(weight=w, affected=w >= 0.5, abnormality=abnormality)
