@@ -38,6 +38,7 @@ from ...symmetry_errors import symmetry_errors
 from ..area_strain import area_strain, area_strain_error
 from ..cohort import Subject
 from ..meshes.mesh_outputs import MESH_OUTPUT_FORMATS, TransportShapes, write_subject_meshes
+from ..volume import enclosed_volume
 from .results import (
     ERROR_NAMES,
     FANNING,
@@ -127,12 +128,38 @@ class StudyConfig:
     warm_starts: bool = False
 
     def __post_init__(self):
+        """Every field checked here, so that a bad one stops a study before any registration."""
         if not isinstance(self.registration, RegistrationSettings):
             raise TypeError(
                 "StudyConfig: registration: expected RegistrationSettings, got "
                 f"{type(self.registration).__name__}"
             )
-        object.__setattr__(self, "alpha2", tuple(float(a) for a in self.alpha2))
+        try:
+            alpha2 = tuple(self.alpha2)
+        except TypeError:
+            raise ValueError(
+                f"StudyConfig.alpha2: expected a sequence of numbers > 0, got {self.alpha2!r}"
+            ) from None
+        if not alpha2:
+            raise ValueError("StudyConfig.alpha2: expected at least one value, got none")
+        alpha2 = tuple(_check_alpha2(a, "StudyConfig.alpha2") for a in alpha2)
+        if len(set(alpha2)) != len(alpha2):
+            raise ValueError(f"StudyConfig.alpha2: values repeated in {list(alpha2)}")
+        object.__setattr__(self, "alpha2", alpha2)
+        if self.deformation not in DEFORMATIONS:
+            raise ValueError(
+                f"StudyConfig.deformation: expected one of {sorted(DEFORMATIONS)}, got "
+                f"{self.deformation!r}"
+            )
+        if self.distance not in UNITS:
+            raise ValueError(
+                f"StudyConfig.distance: expected one of {sorted(UNITS)}, got {self.distance!r}"
+            )
+        steps = self.fanning_steps
+        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+            raise ValueError(f"StudyConfig.fanning_steps: expected an int >= 1, got {steps!r}")
+        if not isinstance(self.warm_starts, (bool, np.bool_)):
+            raise ValueError(f"StudyConfig.warm_starts: expected a bool, got {self.warm_starts!r}")
 
     @classmethod
     def build(cls, **fields) -> StudyConfig:
@@ -161,6 +188,10 @@ class StudyConfig:
         }
 
 
+#: The deformation spaces of the study, by ``StudyConfig.deformation``.
+DEFORMATIONS = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
+
+
 def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
     """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``.
 
@@ -170,13 +201,8 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
     control points are the same material points on ``T``, ``S``, ``S'``, ``M`` and
     the reflected shapes.
     """
-    spaces = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
-    if config.deformation not in spaces:
-        raise ValueError(
-            f"StudyConfig.deformation: expected 'lddmm' or 'svf', got {config.deformation!r}"
-        )
     k, d = template.shape
-    return spaces[config.deformation](
+    return DEFORMATIONS[config.deformation](
         n_landmarks=k,
         dim=d,
         alpha=float(np.sqrt(alpha2)),
@@ -184,10 +210,11 @@ def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
     )
 
 
-def _check_alpha2(alpha2) -> float:
-    value = float(alpha2) if isinstance(alpha2, (int, float)) else float("nan")
+def _check_alpha2(alpha2, name: str = "alpha2") -> float:
+    number = isinstance(alpha2, (int, float, np.integer, np.floating))
+    value = float(alpha2) if number else float("nan")
     if isinstance(alpha2, bool) or not np.isfinite(value) or value <= 0:
-        raise ValueError(f"alpha2: expected a finite number > 0, got {alpha2!r}")
+        raise ValueError(f"{name}: expected a finite number > 0, got {alpha2!r}")
     return value
 
 
@@ -213,21 +240,50 @@ def _registration(space, dist, t, s) -> RegistrationSummary:
     )
 
 
-def _other_transport(config, space, t, s, s2) -> tuple[str, np.ndarray]:
-    """The fanning scheme (LDDMM) or the SVF pole ladder by conjugation (SVF): ``T'``."""
+def _other_transport(config, space, t, s, s2) -> tuple[str, np.ndarray, np.ndarray | None]:
+    """The fanning scheme (LDDMM) or the SVF pole ladder by conjugation (SVF).
+
+    Returns the method, ``T'`` and the transported momenta at the atlas's control
+    points (None for the conjugation, which is no tangent of the space at ``T``).
+    """
     if config.deformation == "svf":  # exp(-v/2) o exp(u) o exp(v/2) applied to T
-        return SVF_CONJUGATION, group_pole_ladder(
-            space, t, space.log(t, s), space.log(s, s2), base=s
-        )
+        t_other = group_pole_ladder(space, t, space.log(t, s), space.log(s, s2), base=s)
+        return SVF_CONJUGATION, t_other, None
     # Transport Log_S(S') along the geodesic S -> T, then shoot the atlas with it.
     fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
-    return FANNING, space.shoot(t, fan.momenta, control_points=fan.control_points)
+    t_other = space.shoot(t, fan.momenta, control_points=fan.control_points)
+    return FANNING, t_other, _at_atlas_control_points(space, t, fan.control_points, fan.momenta)
+
+
+def _at_atlas_control_points(space, t, control_points, momenta) -> np.ndarray | None:
+    """Momenta at ``c(T)`` whose velocity there equals that of ``momenta`` at ``control_points``.
+
+    The fanning scheme's momenta live at the control points it carried along the
+    geodesic ``S -> T``, close to but not at the atlas's own: the kernel field they
+    define is sampled at ``c(T)`` and solved back to momenta there (the RKHS
+    projection), so that every subject's tangent is at the same control points.
+    """
+    if space.optimize_control_points:
+        return None
+    cp = space.control_points(t)
+    velocity = space.kernel.convolve(cp, np.asarray(control_points), np.asarray(momenta))
+    return space.kernel_solve(cp, velocity)
+
+
+def _pole_ladder_tangent(space, sp, t, reflected) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Momenta and residual of the pole ladder's tangent ``-Log_T(T'')`` (cached registration)."""
+    tangent = -sp.log(t, reflected)
+    momenta = tangent.tangent
+    if not isinstance(momenta, np.ndarray):  # optimised control points: not at c(T)
+        momenta = None
+    residual = tangent.residual if sp.use_residuals else None
+    return momenta, residual
 
 
 def _transports(config, space, dist, atlas, faces, subject, las_subject):
     """Symmetry errors of both variants and the three transports, with their shapes."""
     t, s, s2 = atlas, subject.ed, subject.es
-    errors, transports, shapes = [], [], []
+    errors, transports, shapes, tangents = [], [], [], []
     for variant in VARIANTS:
         sp = ResidualAugmented(space, use_residuals=variant == "residual")
         errs = symmetry_errors(sp, t, s, s2, distance=dist, warm_start=config.warm_starts)
@@ -241,12 +297,23 @@ def _transports(config, space, dist, atlas, faces, subject, las_subject):
                 points["reflected"],
             )
         )
-    method, t_other = _other_transport(config, space, t, s, s2)
+        tangents.append(_pole_ladder_tangent(space, sp, t, points["reflected"]))
+    method, t_other, momenta = _other_transport(config, space, t, s, s2)
     shapes.append(TransportShapes(method, t_other))
-    for shape in shapes:
+    tangents.append((momenta, None))
+    for shape, (momenta, residual) in zip(shapes, tangents):
         las = area_strain(t, shape.transported, faces)
         ase = area_strain_error(las_subject, las)
-        transports.append(TransportResult(shape.method, ase, las))
+        transports.append(
+            TransportResult(
+                shape.method,
+                ase,
+                las,
+                displacement=np.ravel(shape.transported - t),
+                momenta=() if momenta is None else np.ravel(momenta),
+                residual=() if residual is None else np.ravel(residual),
+            )
+        )
     return errors, transports, shapes
 
 
@@ -315,6 +382,9 @@ def compute_pair(
         counts=RegistrationCounts.of_space(space),
         seconds=0.0,
         kernel_backend=config.registration.resolved_backend(),
+        displacement_subject=np.ravel(subject.es - subject.ed),
+        volume_ratio_subject=enclosed_volume(subject.es, faces)
+        / enclosed_volume(subject.ed, faces),
     )
     if meshes is not None:
         write_subject_meshes(meshes, subject, atlas, faces, result, shapes, ext=mesh_format)

@@ -6,17 +6,29 @@
 anything it cannot read whole (:class:`ResultSchemaError`, naming the field): a
 file of another schema version, a missing or extra field, a value of the wrong
 type or a non-finite number.
+
+Per-vertex arrays (tuples of more than :data:`LIST_LIMIT` floats: strain maps,
+displacements, momenta) are stored exactly and compactly as
+``{"float64_base64": <little-endian IEEE 754 bytes in base64>}``; shorter tuples as
+JSON lists.
 """
 
 from __future__ import annotations
 
+import base64
 import dataclasses
 import math
 import typing
 
+import numpy as np
+
 from .results import SCHEMA_VERSION, FailedPair, PairResult
 
-__all__ = ["ResultSchemaError", "encode", "decode", "schema_version"]
+__all__ = ["ResultSchemaError", "encode", "decode", "schema_version", "LIST_LIMIT"]
+
+#: Float tuples longer than this are stored as base64 float64 rather than JSON lists.
+LIST_LIMIT = 16
+_ARRAY_KEY = "float64_base64"
 
 
 class ResultSchemaError(ValueError):
@@ -25,8 +37,31 @@ class ResultSchemaError(ValueError):
 
 def encode(result: PairResult | FailedPair) -> dict:
     """The JSON-ready dict of ``result``, with ``schema_version`` and ``status`` first."""
-    body = dataclasses.asdict(result)
+    body = _compact(dataclasses.asdict(result))
     return {"schema_version": SCHEMA_VERSION, "status": result.status, **body}
+
+
+def _compact(node):
+    """``node`` with every long tuple of floats as a base64 float64 record."""
+    if isinstance(node, dict):
+        return {k: _compact(v) for k, v in node.items()}
+    if isinstance(node, (tuple, list)):
+        if len(node) > LIST_LIMIT and all(type(v) is float for v in node):
+            raw = np.asarray(node, dtype="<f8").tobytes()
+            return {_ARRAY_KEY: base64.b64encode(raw).decode("ascii")}
+        return [_compact(v) for v in node]
+    return node
+
+
+def _expand(value, path: str) -> list:
+    """The list of floats of a base64 float64 record."""
+    if set(value) != {_ARRAY_KEY} or not isinstance(value[_ARRAY_KEY], str):
+        raise ResultSchemaError(f"{path}: expected a list or {{{_ARRAY_KEY!r}: ...}}")
+    try:
+        raw = base64.b64decode(value[_ARRAY_KEY], validate=True)
+        return np.frombuffer(raw, dtype="<f8").tolist()
+    except ValueError as exc:
+        raise ResultSchemaError(f"{path}: unreadable float64 array ({exc})") from None
 
 
 def schema_version(data) -> int | None:
@@ -79,6 +114,8 @@ def _value(hint, value, path: str):
     origin = typing.get_origin(hint)
     if origin is tuple:
         item = typing.get_args(hint)[0]
+        if item is float and isinstance(value, dict):
+            value = _expand(value, path)
         if not isinstance(value, list):
             raise ResultSchemaError(f"{path}: expected a list, got {type(value).__name__}")
         return tuple(_value(item, v, f"{path}[{i}]") for i, v in enumerate(value))

@@ -48,7 +48,9 @@ __all__ = [
 ]
 
 #: Version of the layout of a stored pair result; a file of another version is recomputed.
-SCHEMA_VERSION = 2
+#: Version 3 adds the transported motion (displacements, momenta, residuals) and stores
+#: long arrays as base64 float64.
+SCHEMA_VERSION = 3
 
 VARIANTS = ("residual", "no_residual")
 ERROR_NAMES = ("midpoint_distance", "centrality", "involutivity", "transvectivity")
@@ -186,14 +188,47 @@ class TransportResult:
         Area strain error ``||LAS_T' - LAS_S||_2``.
     las : tuple of float
         Local area strain from ``T`` to ``T'`` at every vertex.
+    displacement : tuple of float
+        The transported motion as a displacement of the atlas, ``T' - T``, flattened
+        from ``(k, d)`` (:meth:`displacement_array`).
+    momenta : tuple of float
+        The transported tangent vector's momenta at the atlas's control points,
+        flattened from ``(n_cp, d)``; empty when the transport gives no tangent of the
+        space at ``T`` (the SVF conjugation) or its tangents carry their own control
+        points (optimised control points). For the pole ladder, ``-Log_T(T'')`` with
+        ``T'' = s_M(S')``; for the fanning scheme, the transported momenta carried
+        to the atlas's control points (see :func:`~ladders.study.running.pipeline.compute_pair`).
+    residual : tuple of float
+        The residual part ``delta`` of the transported tangent (eq. 4), flattened from
+        ``(k, d)``; empty when it has none (no residuals, fanning, conjugation).
     """
 
     method: str
     ase: float
     las: tuple[float, ...]
+    displacement: tuple[float, ...] = ()
+    momenta: tuple[float, ...] = ()
+    residual: tuple[float, ...] = ()
 
     def __post_init__(self):
-        object.__setattr__(self, "las", _floats(self.las))
+        for name in ("las", "displacement", "momenta", "residual"):
+            object.__setattr__(self, name, _floats(getattr(self, name)))
+
+    def displacement_array(self, dim: int = 3) -> np.ndarray:
+        """``T' - T`` as an array ``(k, dim)``."""
+        return np.asarray(self.displacement, dtype=float).reshape(-1, dim)
+
+    def momenta_array(self, dim: int = 3) -> np.ndarray | None:
+        """The transported momenta ``(n_cp, dim)``, or None when not stored."""
+        if not self.momenta:
+            return None
+        return np.asarray(self.momenta, dtype=float).reshape(-1, dim)
+
+    def residual_array(self, dim: int = 3) -> np.ndarray | None:
+        """The transported residual ``(k, dim)``, or None when the tangent has none."""
+        if not self.residual:
+            return None
+        return np.asarray(self.residual, dtype=float).reshape(-1, dim)
 
     @property
     def label(self) -> str:
@@ -239,6 +274,12 @@ class PairResult(_Pair):
     seconds : float
     kernel_backend : str
         The kernel backend that ran.
+    displacement_subject : tuple of float
+        The subject's own motion ``S' - S``, flattened from ``(k, d)``: the motion
+        without transport, in the subject's frame.
+    volume_ratio_subject : float
+        ``V(S') / V(S)``, the volumes enclosed by the subject's meshes
+        (:func:`ladders.study.volume.enclosed_volume`): one minus its ejection fraction.
     """
 
     settings_key: str
@@ -251,6 +292,8 @@ class PairResult(_Pair):
     counts: RegistrationCounts
     seconds: float
     kernel_backend: str
+    displacement_subject: tuple[float, ...] = ()
+    volume_ratio_subject: float = 1.0
 
     status = "ok"
 
@@ -259,6 +302,7 @@ class PairResult(_Pair):
         object.__setattr__(self, "errors", tuple(self.errors))
         object.__setattr__(self, "transports", tuple(self.transports))
         object.__setattr__(self, "las_subject", _floats(self.las_subject))
+        object.__setattr__(self, "displacement_subject", _floats(self.displacement_subject))
 
     def variant(self, name: str) -> VariantErrors:
         """The errors of the variant ``name`` (``"residual"`` or ``"no_residual"``)."""

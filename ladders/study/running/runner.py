@@ -13,14 +13,17 @@ import numpy as np
 
 from ..cohort import Subject
 from ..errors import CohortError
+from ..meshes.mesh_io import write_mesh
 from .pipeline import StudyConfig, compute_pair
 from .provenance import write_manifest
 from .results import FailedPair, PairResult, SubjectResults
 from .store import PairStore, array_digest, atomic_write_text, config_hash, validate_subject_name
 
-__all__ = ["StudyOutcome", "run_study", "configuration_id"]
+__all__ = ["StudyOutcome", "run_study", "configuration_id", "ATLAS_FILE"]
 
 _CLAIM_POLL_S = 0.5  # how often a run checks pairs claimed by another run
+#: The atlas and faces of a configuration's results, next to its ``config.json``.
+ATLAS_FILE = "atlas.vtu"
 
 
 @dataclass
@@ -246,6 +249,7 @@ def run_study(
     config_id, shared = configuration_id(config, atlas, faces)
     store = PairStore(output, config_id)
     atomic_write_text(store.root / "config.json", json.dumps(shared, indent=2))
+    write_mesh(store.root / ATLAS_FILE, atlas, faces, atomic=True)
     alphas = [float(a) for a in config.alpha2]
     by_name = {s.name: s for s in subjects}
     mesh_folder = output / "meshes" / config_id if meshes else None

@@ -3,6 +3,7 @@
 Layout of an output folder::
 
     results/<config>/config.json                  settings shared by the files below
+    results/<config>/atlas.vtu                    their atlas and faces
     results/<config>/<subject>/alpha2=<a>.json    one result per subject and alpha^2
 
 ``<config>`` is a hash of every setting the results depend on except the
