@@ -17,8 +17,10 @@ Sub-packages, by concern:
   comparison;
 - :mod:`.cli`: the ``symladders`` command line.
 
-Beside them: local area strain (:func:`area_strain`, :func:`area_strain_error`) and
-the analytic validation run (:func:`run_validation`).
+Beside them: local area strain (:func:`area_strain`, :func:`area_strain_error`),
+enclosed volumes (:mod:`.volume`), the analytic validation run (:func:`run_validation`),
+:func:`run`, the study in one call (:mod:`.study_run`), and :mod:`.population`, the
+group statistics of transported motion.
 """
 
 from .analytic_validation import ValidationReport, run_validation
@@ -116,4 +118,8 @@ __all__ = [
     "write_report",
     "ValidationReport",
     "run_validation",
+    "StudyRun",
+    "run",
 ]
+
+from .study_run import StudyRun, run  # noqa: E402  (the facade, above every sub-package)

@@ -183,9 +183,10 @@ def _config(args, deformation: str):
 
 
 def _run_one(args, cohort, description, config, output: Path, units: str):
-    """Run (or resume) one study into ``output``, write its report, print its summary."""
-    from ..reporting import summarize, terminal_summary, write_report
-    from ..running import RegistrationCounts, run_study
+    """Run (or resume) one study into ``output`` (:func:`ladders.study.run`), print its summary."""
+    from ..reporting import summarize, terminal_summary
+    from ..running import RegistrationCounts
+    from ..study_run import run
 
     print(
         f"symladders study: {len(cohort)} subjects, {cohort.n_vertices} vertices, "
@@ -194,31 +195,20 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
     )
     print(units)
     with _backend(args):
-        outcome = run_study(
-            config,
-            cohort.atlas,
-            cohort.faces,
-            cohort.subjects,
-            output,
-            jobs=args.jobs,
-            progress=not args.no_progress,
-            data_description=description,
-            meshes=not args.no_meshes,
+        done = run(
+            config, cohort, output, jobs=args.jobs, progress=not args.no_progress,
+            meshes=not args.no_meshes, units=units, data_description=description,
             input_files=_input_files(args, cohort),
-        )
+        )  # fmt: skip
+    outcome, paths = done.outcome, dict(done.report)
     _note_recomputed(outcome)
     if outcome.skipped:
         print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
         if not args.no_meshes:
             _note_pairs_without_meshes(outcome)
-    shapes = {s.name: s.ed for s in cohort.subjects}
     from manifolds.numerics.solvers import StoppingRule
 
     rule = StoppingRule.from_settings(config.registration)
-    paths = write_report(
-        outcome.results, output, cohort.atlas, cohort.faces, shapes, stopping=rule.describe(),
-        units=units,
-    )  # fmt: skip
     pairs = [p for r in outcome.results for p in r.pairs]
     if pairs:
         print()
@@ -281,7 +271,7 @@ def run_study_command(args) -> int:
             "symladders study: --optimize-control-points works with --deformation lddmm only"
         )
     configs = {model: _config(args, model) for model in models}
-    for config in configs.values():  # the registration settings are the whole configuration
+    for config in configs.values():  # before any study starts (run() checks it again)
         check_sigma(cohort.atlas, config.registration)
     outcomes = {}
     for model, config in configs.items():
