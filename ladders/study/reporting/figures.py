@@ -17,29 +17,39 @@ from .selection import (
     transport_rows,
 )
 
-__all__ = ["plot_errors", "plot_ase", "plot_maps"]
+__all__ = ["plot_errors", "plot_ase", "plot_maps", "map_pair"]
 
 _COLORS = {"residual": "tab:blue", "no_residual": "tab:orange"}
 _OTHER_COLOR = "tab:green"
 
 
+def _centres(keys) -> np.ndarray:
+    """Positions of the alpha^2 groups on a log-spaced axis (log10 alpha^2)."""
+    return np.log10(np.asarray([float(k) for k in keys]))
+
+
 def _boxes(ax, results, keys, rows: list, measure: str, log: bool) -> None:
-    """Grouped box plots: one group per alpha^2, one box per row."""
-    width = len(rows) + 1
+    """Grouped box plots on a log-spaced alpha^2 axis: one group per alpha^2, one box per row."""
+    centres = _centres(keys)
+    gaps = np.diff(centres)
+    group = 0.8 * (gaps.min() if gaps.size else 1.0)
+    box = group / len(rows)
     for j, row in enumerate(rows):
         data = [collect(results, k, row, measure) for k in keys]
         if log:
             data = [np.maximum(v, 1e-16) for v in data]
+        positions = centres + (j - (len(rows) - 1) / 2) * box
         bp = ax.boxplot(
-            data, positions=np.arange(len(keys)) * width + j, widths=0.8, patch_artist=True,
+            data, positions=positions, widths=0.85 * box, patch_artist=True,
             showfliers=True, medianprops={"color": "black"}, flierprops={"markersize": 3},
         )  # fmt: skip
         for patch in bp["boxes"]:
             patch.set_facecolor(_COLORS.get(row, _OTHER_COLOR))
             patch.set_alpha(0.7)
-    ax.set_xticks(np.arange(len(keys)) * width + (len(rows) - 1) / 2)
+    ax.set_xticks(centres)
     ax.set_xticklabels([f"{float(k):g}" for k in keys])
-    ax.set_xlabel("α²")
+    ax.set_xlim(centres.min() - group, centres.max() + group)
+    ax.set_xlabel("α² (log scale)")
     if log:
         ax.set_yscale("log")
     ax.grid(True, axis="y", which="both", alpha=0.3)
@@ -56,7 +66,7 @@ def plot_errors(results: list[dict], path: Path, unit: str) -> None:
     keys = alpha_values(results)
     n = len(results)
     fig, axes = plt.subplots(2, 2, figsize=(12, 9))
-    centres = np.arange(len(keys)) * 3 + 0.5
+    centres = _centres(keys)
     refs = {
         "registration_error": ("median registration error T→S", "k--", "s"),
         "inverse_consistency": ("median inverse consistency", "k:", "^"),
@@ -71,9 +81,13 @@ def plot_errors(results: list[dict], path: Path, unit: str) -> None:
     handles = [plt.Rectangle((0, 0), 1, 1, color=_COLORS[v], alpha=0.7) for v in VARIANTS]
     handles += axes[0, 0].get_lines()[-2:]
     labels = ["with residuals", "without residuals", *(r[0] for r in refs.values())]
-    fig.legend(handles, labels, loc="upper center", ncol=4, bbox_to_anchor=(0.5, 0.955))
-    fig.suptitle(f"Symmetry errors of the pole ladder, {n} subjects, in {unit}", fontsize=14)
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    fig.legend(handles, labels, loc="upper center", ncol=4, bbox_to_anchor=(0.5, 0.935))
+    fig.suptitle(
+        "Fig. 4: the symmetry errors against α², with and without residuals\n"
+        f"{n} subjects; errors in {unit}",
+        fontsize=13,
+    )
+    fig.tight_layout(rect=(0, 0, 1, 0.915))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -113,8 +127,10 @@ def _surface(ax, verts, faces, values, cmap, lim, azim) -> object:
     return surf
 
 
-def _map_pair(subfig, verts, faces, values, cmap, lim, title, views) -> object:
-    """One map from two views side by side, in a subfigure titled ``title``."""
+def map_pair(subfig, verts, faces, values, cmap, lim, title, views) -> object:
+    """One map of per-vertex ``values`` on a mesh from two views (azimuths ``views``,
+    degrees) side by side, in the matplotlib subfigure ``subfig`` titled ``title``;
+    returns the last surface (for a colour bar)."""
     surf = None
     for j, azim in enumerate(views):
         ax = subfig.add_subplot(1, 2, j + 1, projection="3d")
@@ -165,13 +181,13 @@ def plot_maps(results: list, atlas, subjects_ed, faces, path: Path) -> str:
     fig = plt.figure(figsize=(15, 7.2))
     head, top, bottom = fig.subfigures(3, 1, height_ratios=(0.1, 1, 1))
     sub = np.array([top.subfigures(1, 4), bottom.subfigures(1, 4)])
-    s1 = _map_pair(sub[0, 0], np.asarray(subjects_ed[shown.subject]), faces, subject_las,
+    s1 = map_pair(sub[0, 0], np.asarray(subjects_ed[shown.subject]), faces, subject_las,
                    "viridis", strain_lim, "LAS_S on S (subject)", views)  # fmt: skip
     for col, row in enumerate(rows, start=1):
         ase = f"ASE = {pair.measure(row, 'ase'):.3g}"
-        _map_pair(sub[0, col], atlas, faces, las[row], "viridis", strain_lim,
+        map_pair(sub[0, col], atlas, faces, las[row], "viridis", strain_lim,
                   f"LAS_T′ on T: {row_label(row)}\n{ase}", views)  # fmt: skip
-        s2 = _map_pair(sub[1, col], atlas, faces, err[row], "RdBu_r", (-e, e),
+        s2 = map_pair(sub[1, col], atlas, faces, err[row], "RdBu_r", (-e, e),
                        f"error LAS_T′ − LAS_S: {row_label(row)}\n{ase}", views)  # fmt: skip
     for x, surf, label in (
         (0.3, s1, "local area strain (a − a′)/a\n(top row)"),
