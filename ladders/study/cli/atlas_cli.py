@@ -168,7 +168,7 @@ def _data_term(args, inputs, initial) -> tuple[bool | None, str]:
 
 
 def _record(args, inputs, settings, label, result, interrupted=False) -> dict:
-    from ..running.provenance import file_sha256
+    from ..files import file_sha256
 
     return {
         "atlas": str(Path(args.output).resolve()),
@@ -191,8 +191,8 @@ def _record(args, inputs, settings, label, result, interrupted=False) -> dict:
 
 
 def _write(args, vertices, faces, record) -> Path:
+    from ..files import atomic_write_text
     from ..meshes import write_mesh
-    from ..running.store import atomic_write_text
 
     output = Path(args.output)
     output.parent.mkdir(parents=True, exist_ok=True)

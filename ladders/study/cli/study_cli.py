@@ -238,12 +238,12 @@ def _note_recomputed(outcome) -> None:
 
 
 def _write_comparison(outcomes: dict, output: Path) -> Path:
+    from ..files import atomic_write_text
     from ..reporting.deformation_comparison import (
         compare_deformations,
         comparison_csv,
         comparison_markdown,
     )
-    from ..running.store import atomic_write_text
 
     rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
     units = [p.unit for r in outcomes["lddmm"].results for p in r.pairs]

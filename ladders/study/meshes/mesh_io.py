@@ -14,12 +14,12 @@ triangulation. Folders and tables of meshes are read by
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MeshFolderError
+from ..files import atomic_path
 from .mesh_readers import MESH_FORMATS, reader_for
 from .vtk_io import read_vtk, write_vtk
 from .vtk_xml import read_vtp
@@ -101,11 +101,6 @@ def write_mesh(path, vertices, faces, *, atomic: bool = False) -> Path:
     if not atomic:
         fmt.write(path, v, f)
         return path
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp{path.suffix}")
-    try:
+    with atomic_path(path) as tmp:
         fmt.write(tmp, v, f)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path

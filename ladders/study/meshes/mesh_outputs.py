@@ -40,8 +40,6 @@ carries ``las_subject``:
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -50,6 +48,7 @@ import meshio
 import numpy as np
 
 from ..errors import MeshFolderError
+from ..files import atomic_path
 
 if TYPE_CHECKING:
     from ..cohort import Subject
@@ -119,16 +118,8 @@ def write_point_mesh(path, vertices, faces, point_data: dict | None = None) -> P
             )
         data[name] = arr
     mesh = meshio.Mesh(v, [("triangle", np.asarray(faces, dtype=np.int64))], point_data=data)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=ext)
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         meshio.write(tmp, mesh, file_format="vtu" if ext == ".vtu" else "vtk", binary=True)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path
 
 

@@ -33,9 +33,9 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ..cohort.mesh_folder import natural_key, scan_mesh_folder
+from ..files import array_digest, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
-from ..running.provenance import file_sha256
-from ..running.store import array_digest, atomic_write_text, validate_subject_name
+from ..running.store import validate_subject_name
 from .correspondence import CorrespondenceSettings, correspond_subject
 from .quality_table import write_quality_table
 from .units import check_units_and_pose

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..running.store import atomic_write_text
+from ..files import atomic_write_text
 
 __all__ = ["COLUMNS", "quality_rows", "write_quality_table"]
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_write_text
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS, RegistrationCounts
-from ..running.store import atomic_write_text
 from .figures import plot_ase, plot_errors, plot_maps
 from .selection import LABELS, alpha_values, collect, row_label, transport_rows
 from .statistics import paired_csv, paired_statistics, tidy_csv, tidy_rows

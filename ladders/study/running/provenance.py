@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 import platform
 import re
@@ -12,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_write_text, file_sha256
 from .results import RegistrationCounts
-from .store import atomic_write_text
 
 __all__ = ["build_manifest", "write_manifest", "package_versions", "file_sha256"]
 
@@ -44,15 +43,6 @@ def package_versions() -> dict[str, str | None]:
         except metadata.PackageNotFoundError:
             versions[name] = None
     return versions
-
-
-def file_sha256(path: str | Path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _kernel_backend(outcome, config) -> list[str]:

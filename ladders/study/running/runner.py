@@ -13,11 +13,12 @@ import numpy as np
 
 from ..cohort import Subject
 from ..errors import CohortError
+from ..files import array_digest, atomic_write_text, config_hash
 from ..meshes.mesh_io import write_mesh
 from .pipeline import StudyConfig, compute_pair
 from .provenance import write_manifest
 from .results import FailedPair, PairResult, SubjectResults
-from .store import PairStore, array_digest, atomic_write_text, config_hash, validate_subject_name
+from .store import PairStore, validate_subject_name
 
 __all__ = ["StudyOutcome", "run_study", "configuration_id", "ATLAS_FILE"]
 

@@ -14,9 +14,8 @@ settings writes into its own folder and never touches earlier results.
 The store alone writes the typed results
 (:class:`~ladders.study.running.results.PairResult`,
 :class:`~ladders.study.running.results.FailedPair`) to JSON and reads them back
-(:mod:`ladders.study.running.result_codec`). Each file is written to a temporary
-name in the same folder, flushed to disk and renamed over the final name (atomic
-on POSIX and Windows), with the permissions the user's umask gives. A file is
+(:mod:`ladders.study.running.result_codec`). Each file is written atomically
+(:func:`ladders.study.files.atomic_write_text`). A file is
 reused only if it parses, is of the current
 :data:`~ladders.study.running.results.SCHEMA_VERSION`, carries the expected
 parameter hash and holds the whole result; otherwise the pair is recomputed and
@@ -26,19 +25,17 @@ through claims (:mod:`ladders.study.running.claims`).
 
 from __future__ import annotations
 
-import hashlib
 import json
-import os
-import tempfile
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import CohortError
+from ..files import array_digest, atomic_write_text, config_hash
 from .claims import Claim
 from .result_codec import ResultSchemaError, decode, encode
 from .results import FailedPair, PairResult
 
+# atomic_write_text, array_digest and config_hash live in ladders.study.files; they are
+# re-exported here, where the study's code and tests have imported them from.
 __all__ = [
     "atomic_write_text",
     "array_digest",
@@ -46,56 +43,6 @@ __all__ = [
     "validate_subject_name",
     "PairStore",
 ]
-
-
-def _umask() -> int:
-    """The process's umask, read without changing it where the OS allows."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except OSError:
-        pass
-    mask = os.umask(0o022)  # no read-only query elsewhere: set and restore
-    os.umask(mask)
-    return mask
-
-
-def atomic_write_text(path: str | Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temporary file, fsync, rename).
-
-    The file gets mode ``0o666 & ~umask``, like a file opened for writing
-    (the temporary file is created ``0o600``).
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def array_digest(arr) -> str:
-    """A short hash of an array's dtype, shape and bytes."""
-    arr = np.ascontiguousarray(arr)
-    h = hashlib.sha256(f"{arr.dtype.str}{arr.shape}".encode())
-    h.update(arr.tobytes())
-    return h.hexdigest()[:16]
-
-
-def config_hash(params: dict) -> str:
-    """A short stable hash of JSON-serialisable parameters."""
-    blob = json.dumps(params, sort_keys=True, default=str).encode()
-    return hashlib.sha256(blob).hexdigest()[:16]
 
 
 def validate_subject_name(name) -> str:
