@@ -121,7 +121,7 @@ def _table(atlas, faces, subjects, folder, jobs):
 
     config = StudyConfig.build(alpha2=(0.01, 1.0, 1089.0))
     res = run_study(config, atlas, faces, subjects, folder, jobs=jobs, progress=False, meshes=False)
-    return {(r["alpha2"], r["variant"], r["measure"]): r["mean"] for r in summarize(res.results)}
+    return {(r.alpha2, r.variant, r.measure): r.mean for r in summarize(res.results)}
 
 
 def compare_with_truth(cohort, motions, out, tmp: Path, jobs: int) -> None:

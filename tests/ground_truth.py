@@ -53,7 +53,7 @@ def table(atlas, faces, subjects, folder) -> dict:
     """Table 1 (``{(alpha2, variant, measure): mean}``) of the study on ``subjects``."""
     config = StudyConfig.build(sigma=SIGMA, max_iter=MAX_ITER, alpha2=ALPHA2)
     res = run_study(config, atlas, faces, subjects, folder, jobs=1, progress=False, meshes=False)
-    return {(r["alpha2"], r["variant"], r["measure"]): r["mean"] for r in summarize(res.results)}
+    return {(r.alpha2, r.variant, r.measure): r.mean for r in summarize(res.results)}
 
 
 def reference_table(cohort, folder) -> dict:

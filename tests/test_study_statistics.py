@@ -62,10 +62,10 @@ def test_tidy_table_columns_rows_and_units():
 def test_paired_comparison_known_answer():
     rng = np.random.default_rng(0)
     res = paired_comparison([1, 2, 3, 4, 5], [2, 4, 6, 8, 10], rng)  # d = -1 ... -5
-    assert res["n"] == 5 and res["fraction_residual_lower"] == 1.0
-    assert res["median_difference"] == -3.0
-    assert res["wilcoxon_p"] == pytest.approx(2 / 2**5)  # exact two-sided, all one sign
-    assert -5 <= res["ci_low"] <= -3 <= res["ci_high"] <= -1
+    assert res.n == 5 and res.fraction_residual_lower == 1.0
+    assert res.median_difference == -3.0
+    assert res.wilcoxon_p == pytest.approx(2 / 2**5)  # exact two-sided, all one sign
+    assert -5 <= res.ci_low <= -3 <= res.ci_high <= -1
     # The interval is scipy's paired BCa bootstrap of the median difference, same seed.
     from scipy.stats import bootstrap
 
@@ -75,30 +75,30 @@ def test_paired_comparison_known_answer():
         paired=True, vectorized=True, method="BCa", n_resamples=2000,
         rng=np.random.default_rng(0),
     ).confidence_interval  # fmt: skip
-    assert (res["ci_low"], res["ci_high"]) == (expected.low, expected.high)
+    assert (res.ci_low, res.ci_high) == (expected.low, expected.high)
     again = paired_comparison([1, 2, 3, 4, 5], [2, 4, 6, 8, 10], np.random.default_rng(0))
     assert again == res  # seeded
     mixed = paired_comparison([0, 5, 0, 5, 0, 5, 0], [1, 0, 1, 0, 1, 0, 1], rng)
-    assert mixed["fraction_residual_lower"] == pytest.approx(4 / 7)
-    assert mixed["median_difference"] == -1.0
+    assert mixed.fraction_residual_lower == pytest.approx(4 / 7)
+    assert mixed.median_difference == -1.0
 
 
 def test_paired_comparison_degenerate_cases():
     rng = np.random.default_rng(1)
     zero = paired_comparison([1.0, 2.0], [1.0, 2.0], rng)
-    assert zero["wilcoxon_p"] == 1.0 and zero["median_difference"] == 0.0
-    assert zero["fraction_residual_lower"] == 0.0 and "zero" in zero["note"]
+    assert zero.wilcoxon_p == 1.0 and zero.median_difference == 0.0
+    assert zero.fraction_residual_lower == 0.0 and "zero" in zero.note
     empty = paired_comparison([], [], rng)
-    assert empty["n"] == 0 and empty["wilcoxon_p"] is None and empty["median_difference"] is None
+    assert empty.n == 0 and empty.wilcoxon_p is None and empty.median_difference is None
     one = paired_comparison([1.0], [3.0], rng)
-    assert one["wilcoxon_p"] == pytest.approx(1.0) and "n = 1" in one["note"]
-    assert (one["ci_low"], one["ci_high"]) == (-2.0, -2.0)  # all differences equal
-    assert "all differences equal" in one["note"]
+    assert one.wilcoxon_p == pytest.approx(1.0) and "n = 1" in one.note
+    assert (one.ci_low, one.ci_high) == (-2.0, -2.0)  # all differences equal
+    assert "all differences equal" in one.note
     two = paired_comparison([1.0, 2.0], [2.0, 2.0], rng)
-    assert two["ci_low"] is None and two["ci_high"] is None and "n = 2 < 3" in two["note"]
+    assert two.ci_low is None and two.ci_high is None and "n = 2 < 3" in two.note
     ties = paired_comparison([0, 0, 0, 0, 1], [0, 0, 0, 0, 0], rng)  # BCa is 0 / 0 here
-    assert (ties["ci_low"], ties["ci_high"]) == (0.0, 1.0)
-    assert "percentile interval" in ties["note"]
+    assert (ties.ci_low, ties.ci_high) == (0.0, 1.0)
+    assert "percentile interval" in ties.note
     with pytest.raises(ValueError, match="residual, no_residual: .*shapes"):
         paired_comparison([1.0, 2.0], [1.0], rng)
     with pytest.raises(ValueError, match="finite"):
@@ -108,16 +108,16 @@ def test_paired_comparison_degenerate_cases():
 def test_paired_statistics_per_alpha_and_error_skip_failed_subjects():
     results = _results(4, drop=(3, 10.0))  # failed there
     rows = paired_statistics(results, seed=0)
-    assert [(r["alpha2"], r["measure"]) for r in rows[:2]] == [
+    assert [(r.alpha2, r.measure) for r in rows[:2]] == [
         (1.0, "midpoint_distance"),
         (1.0, "centrality"),
     ]
     assert len(rows) == 2 * 5
-    get = {(r["alpha2"], r["measure"]): r for r in rows}
-    assert get[(1.0, "centrality")]["n"] == 4 and get[(10.0, "centrality")]["n"] == 3
-    assert get[(1.0, "centrality")]["median_difference"] == -2.0
-    assert get[(1.0, "transvectivity")]["wilcoxon_p"] == 1.0
-    assert get[(1.0, "ase")]["fraction_residual_lower"] == 1.0
+    get = {(r.alpha2, r.measure): r for r in rows}
+    assert get[(1.0, "centrality")].n == 4 and get[(10.0, "centrality")].n == 3
+    assert get[(1.0, "centrality")].median_difference == -2.0
+    assert get[(1.0, "transvectivity")].wilcoxon_p == 1.0
+    assert get[(1.0, "ase")].fraction_residual_lower == 1.0
     lines = paired_csv(rows).splitlines()
     assert lines[0].startswith("alpha2,measure,n,fraction_residual_lower,median_difference")
     assert len(lines) == 11

@@ -83,14 +83,14 @@ def test_comparison_pairs_subjects_by_name_with_known_answers():
     # SVF lower by i + 1 on subject i; subjects listed in another order; one missing.
     svf = _fake_results({f"s{i}": 10.0 + i - (i + 1) for i in (5, 3, 1, 0, 2)}, inverse=1.0)
     rows = compare_deformations(lddmm, svf, seed=0, n_boot=500)
-    row = next(r for r in rows if r["variant"] == "residual" and r["measure"] == "involutivity")
-    assert row["n"] == 5 and row["fraction_svf_lower"] == 1.0
-    assert row["median_difference"] == -3.0  # differences -1, -2, -3, -4, -6
-    assert row["mean_lddmm"] == pytest.approx(np.mean([10, 11, 12, 13, 15]))
-    assert row["wilcoxon_p"] == pytest.approx(0.0625)  # exact two-sided, n = 5, all negative
-    inverse = next(r for r in rows if r["measure"] == "inverse_consistency")
-    assert inverse["variant"] == "registration" and inverse["median_difference"] == 0.0
-    assert inverse["wilcoxon_p"] == 1.0
+    row = next(r for r in rows if r.variant == "residual" and r.measure == "involutivity")
+    assert row.n == 5 and row.fraction_svf_lower == 1.0
+    assert row.median_difference == -3.0  # differences -1, -2, -3, -4, -6
+    assert row.mean_lddmm == pytest.approx(np.mean([10, 11, 12, 13, 15]))
+    assert row.wilcoxon_p == pytest.approx(0.0625)  # exact two-sided, n = 5, all negative
+    inverse = next(r for r in rows if r.measure == "inverse_consistency")
+    assert inverse.variant == "registration" and inverse.median_difference == 0.0
+    assert inverse.wilcoxon_p == 1.0
     text = comparison_markdown(rows)
     assert "5 subjects" in text and "| 1 | residual | involutivity |" in text
     assert comparison_csv(rows).splitlines()[0].startswith("alpha2,variant,measure,n,")

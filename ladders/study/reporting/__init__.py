@@ -3,11 +3,13 @@
 - :mod:`.report`: the Table-1-style summary and :func:`write_report`;
 - :mod:`.statistics`: the tidy table and the paired comparison;
 - :mod:`.figures`: Fig. 4, Fig. 5a and Fig. 5b;
-- :mod:`.deformation_comparison`: LDDMM against SVF on the same subjects.
+- :mod:`.deformation_comparison`: LDDMM against SVF on the same subjects;
+- :mod:`.rows`: the typed rows of those tables.
 """
 
 from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
 from .report import summarize, summary_markdown, terminal_summary, write_report
+from .rows import DeformationComparisonRow, PairedComparison, PairedRow, SummaryRow
 from .statistics import paired_comparison, paired_statistics, tidy_rows
 
 __all__ = [
@@ -21,4 +23,8 @@ __all__ = [
     "compare_deformations",
     "comparison_csv",
     "comparison_markdown",
+    "SummaryRow",
+    "PairedComparison",
+    "PairedRow",
+    "DeformationComparisonRow",
 ]

@@ -17,6 +17,7 @@ import io
 import numpy as np
 
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
+from .rows import DeformationComparisonRow
 from .statistics import paired_comparison
 
 __all__ = ["MEASURES", "compare_deformations", "comparison_markdown", "comparison_csv"]
@@ -54,7 +55,7 @@ def compare_deformations(lddmm: list, svf: list, seed: int = 0, n_boot: int = 20
 
     Returns
     -------
-    list of dict
+    list of DeformationComparisonRow
         ``alpha2, variant, measure, n, mean_lddmm, mean_svf, fraction_svf_lower,
         median_difference, ci_low, ci_high, wilcoxon_p``.
     """
@@ -70,20 +71,13 @@ def compare_deformations(lddmm: list, svf: list, seed: int = 0, n_boot: int = 20
             y = np.array([a[n] for n in names])
             stats = paired_comparison(x, y, rng, n_boot=n_boot)
             rows.append(
-                {
-                    "alpha2": key,
-                    "variant": variant or "registration",
-                    "measure": measure,
-                    "n": stats["n"],
-                    "mean_lddmm": float(y.mean()) if names else None,
-                    "mean_svf": float(x.mean()) if names else None,
-                    "fraction_svf_lower": stats["fraction_residual_lower"],
-                    "median_difference": stats["median_difference"],
-                    "ci_low": stats["ci_low"],
-                    "ci_high": stats["ci_high"],
-                    "wilcoxon_p": stats["wilcoxon_p"],
-                }
-            )
+                DeformationComparisonRow(
+                    key, variant or "registration", measure, stats.n,
+                    float(y.mean()) if names else None, float(x.mean()) if names else None,
+                    stats.fraction_residual_lower, stats.median_difference, stats.ci_low,
+                    stats.ci_high, stats.wilcoxon_p,
+                )
+            )  # fmt: skip
     return rows
 
 
@@ -91,9 +85,11 @@ def _fmt(value, spec: str = ".3g") -> str:
     return "" if value is None else format(value, spec)
 
 
-def comparison_markdown(rows: list[dict], unit: str = "mm (per-vertex RMS)") -> str:
+def comparison_markdown(
+    rows: list[DeformationComparisonRow], unit: str = "mm (per-vertex RMS)"
+) -> str:
     """The comparison as a Markdown table (distances in ``unit``; the ASE is dimensionless)."""
-    n = max((r["n"] for r in rows), default=0)
+    n = max((r.n for r in rows), default=0)
     lines = [
         f"LDDMM against SVF, {n} subjects; distances in {unit}, the ASE and the deformation "
         "norm without unit. Difference = SVF - LDDMM per subject (median, 95 % bootstrap "
@@ -104,21 +100,20 @@ def comparison_markdown(rows: list[dict], unit: str = "mm (per-vertex RMS)") -> 
         "| ---: | --- | --- | ---: | ---: | ---: | --- | ---: |",
     ]
     for r in rows:
-        ci = f"{_fmt(r['median_difference'])} [{_fmt(r['ci_low'])}, {_fmt(r['ci_high'])}]"
-        lower = "" if r["fraction_svf_lower"] is None else f"{r['fraction_svf_lower']:.0%}"
+        ci = f"{_fmt(r.median_difference)} [{_fmt(r.ci_low)}, {_fmt(r.ci_high)}]"
+        lower = "" if r.fraction_svf_lower is None else f"{r.fraction_svf_lower:.0%}"
         lines.append(
-            f"| {r['alpha2']:g} | {r['variant']} | {r['measure']} | {_fmt(r['mean_lddmm'])} | "
-            f"{_fmt(r['mean_svf'])} | {lower} | {ci} | {_fmt(r['wilcoxon_p'], '.2g')} |"
+            f"| {r.alpha2:g} | {r.variant} | {r.measure} | {_fmt(r.mean_lddmm)} | "
+            f"{_fmt(r.mean_svf)} | {lower} | {ci} | {_fmt(r.wilcoxon_p, '.2g')} |"
         )
     return "\n".join(lines) + "\n"
 
 
-def comparison_csv(rows: list[dict]) -> str:
+def comparison_csv(rows: list[DeformationComparisonRow]) -> str:
     """The comparison as CSV text (``None`` as an empty cell)."""
     buf = io.StringIO()
-    fields = list(rows[0]) if rows else ["alpha2", "variant", "measure"]
-    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer = csv.DictWriter(buf, fieldnames=DeformationComparisonRow.fields(), lineterminator="\n")
     writer.writeheader()
     for r in rows:
-        writer.writerow({k: "" if v is None else v for k, v in r.items()})
+        writer.writerow({k: "" if v is None else v for k, v in r.as_dict().items()})
     return buf.getvalue()

@@ -11,6 +11,7 @@ import numpy as np
 from ..files import atomic_write_text
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS, RegistrationCounts
 from .figures import plot_ase, plot_errors, plot_maps
+from .rows import PairedRow, SummaryRow
 from .selection import LABELS, alpha_values, collect, row_label, transport_rows
 from .statistics import paired_csv, paired_statistics, tidy_csv, tidy_rows
 
@@ -31,7 +32,7 @@ _REGISTRATION_LABELS = {
 }
 
 
-def summarize(results: list) -> list[dict]:
+def summarize(results: list) -> list[SummaryRow]:
     """Mean (and standard deviation) of every measure per ``alpha^2`` and variant.
 
     Parameters
@@ -40,7 +41,7 @@ def summarize(results: list) -> list[dict]:
 
     Returns
     -------
-    list of dict
+    list of SummaryRow
         One row per ``(alpha2, measure, variant)`` with ``mean``, ``std``, ``n``;
         ``variant`` is ``"residual"``, ``"no_residual"``, the third transport
         method (its ASE) or ``"both"`` (the registration measures).
@@ -55,24 +56,17 @@ def summarize(results: list) -> list[dict]:
     for a2 in alpha_values(results):
         for name, row, variant in measures:
             vals = collect(results, a2, row, name)
-            rows.append(
-                {
-                    "alpha2": a2,
-                    "measure": name,
-                    "variant": variant,
-                    "mean": float(vals.mean()),
-                    "std": float(vals.std(ddof=1)) if vals.size > 1 else 0.0,
-                    "n": int(vals.size),
-                }
-            )
+            std = float(vals.std(ddof=1)) if vals.size > 1 else 0.0
+            rows.append(SummaryRow(a2, name, variant, float(vals.mean()), std, int(vals.size)))
     return rows
 
 
-def summary_csv(rows: list[dict]) -> str:
+def summary_csv(rows: list[SummaryRow]) -> str:
+    """The rows of :func:`summarize` as CSV text."""
     buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=["alpha2", "measure", "variant", "mean", "std", "n"])
+    writer = csv.DictWriter(buf, fieldnames=SummaryRow.fields())
     writer.writeheader()
-    writer.writerows(rows)
+    writer.writerows(r.as_dict() for r in rows)
     return buf.getvalue()
 
 
@@ -97,15 +91,15 @@ def convergence_markdown(results: list, stopping: str | None = None) -> str:
     )
 
 
-def _means(rows: list[dict]) -> dict:
-    return {(r["alpha2"], r["measure"], r["variant"]): r["mean"] for r in rows}
+def _means(rows: list[SummaryRow]) -> dict:
+    return {(r.alpha2, r.measure, r.variant): r.mean for r in rows}
 
 
-def summary_markdown(rows: list[dict], unit: str) -> str:
+def summary_markdown(rows: list[SummaryRow], unit: str) -> str:
     """A Table-1-style Markdown table: mean errors per ``alpha^2``, residual vs no residual."""
-    alphas = sorted({r["alpha2"] for r in rows})
+    alphas = sorted({r.alpha2 for r in rows})
     get = _means(rows)
-    other = next(r["variant"] for r in rows if r["variant"] not in (*VARIANTS, "both"))
+    other = next(r.variant for r in rows if r.variant not in (*VARIANTS, "both"))
     head = "| Error type | " + " | ".join(
         f"a²={a:g} Residual | a²={a:g} No residual" for a in alphas
     )
@@ -126,15 +120,15 @@ def summary_markdown(rows: list[dict], unit: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def terminal_summary(rows: list[dict], unit: str, n_subjects: int) -> str:
+def terminal_summary(rows: list[SummaryRow], unit: str, n_subjects: int) -> str:
     """The summary in at most 100 columns: one line per ``alpha^2``, two tables.
 
     Each cell of the first table holds the mean with and without residuals;
     the second holds the third transport's ASE and the registration measures.
     """
-    alphas = sorted({r["alpha2"] for r in rows})
+    alphas = sorted({r.alpha2 for r in rows})
     get = _means(rows)
-    other = next(r["variant"] for r in rows if r["variant"] not in (*VARIANTS, "both"))
+    other = next(r.variant for r in rows if r.variant not in (*VARIANTS, "both"))
     names = {"midpoint_distance": "midpoint", "centrality": "centrality",
              "involutivity": "involutivity", "transvectivity": "transvect.",
              "ase": "ASE pole ladder"}  # fmt: skip
@@ -159,7 +153,7 @@ def _fmt(v, spec: str) -> str:
     return "n/a" if v is None else format(v, spec)
 
 
-def paired_markdown(rows: list[dict], unit: str) -> str:
+def paired_markdown(rows: list[PairedRow], unit: str) -> str:
     """The paired comparison residual vs no residual as a Markdown table."""
     lines = [
         "Paired comparison, with residuals minus without, per subject "
@@ -170,16 +164,12 @@ def paired_markdown(rows: list[dict], unit: str) -> str:
         "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        frac = (
-            "n/a"
-            if r["fraction_residual_lower"] is None
-            else (f"{r['fraction_residual_lower']:.0%}")
-        )
-        ci = f"[{_fmt(r['ci_low'], '.3g')}, {_fmt(r['ci_high'], '.3g')}]"
+        frac = "n/a" if r.fraction_residual_lower is None else f"{r.fraction_residual_lower:.0%}"
+        ci = f"[{_fmt(r.ci_low, '.3g')}, {_fmt(r.ci_high, '.3g')}]"
         lines.append(
-            f"| {r['alpha2']:g} | {LABELS[r['measure']]} | {r['n']} | {frac} | "
-            f"{_fmt(r['median_difference'], '.3g')} | {ci} | {_fmt(r['wilcoxon_p'], '.3g')} "
-            f"| {r['note']} |"
+            f"| {r.alpha2:g} | {LABELS[r.measure]} | {r.n} | {frac} | "
+            f"{_fmt(r.median_difference, '.3g')} | {ci} | {_fmt(r.wilcoxon_p, '.3g')} "
+            f"| {r.note} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -8,8 +8,10 @@ import math
 import warnings
 
 import numpy as np
+from scipy.stats import wilcoxon
 
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
+from .rows import PairedComparison, PairedRow
 from .selection import alpha_values, transport_rows
 
 __all__ = [
@@ -118,7 +120,9 @@ def bootstrap_median_ci(a, b, rng: np.random.Generator, n_boot: int = 2000):
     return float(low), float(high), "BCa undefined (ties): percentile interval"
 
 
-def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: int = 2000) -> dict:
+def paired_comparison(
+    residual, no_residual, rng: np.random.Generator, n_boot: int = 2000
+) -> PairedComparison:
     """Paired comparison of two samples (``residual - no_residual`` per subject).
 
     Parameters
@@ -132,7 +136,7 @@ def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: i
 
     Returns
     -------
-    dict
+    PairedComparison
         ``n``; ``fraction_residual_lower`` (share of subjects with a strictly
         lower error with residuals); ``median_difference`` and its 95 % BCa
         bootstrap interval ``ci_low``, ``ci_high`` (:func:`bootstrap_median_ci`,
@@ -150,30 +154,24 @@ def paired_comparison(residual, no_residual, rng: np.random.Generator, n_boot: i
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         raise ValueError("residual, no_residual: expected finite values, got NaN or inf")
     d = a - b
-    out = {"n": int(d.size), "fraction_residual_lower": None, "median_difference": None,
-           "ci_low": None, "ci_high": None, "wilcoxon_p": None, "note": ""}  # fmt: skip
     if d.size == 0:
-        out["note"] = "no subject"
-        return out
-    out["fraction_residual_lower"] = float(np.mean(d < 0))
-    out["median_difference"] = float(np.median(d))
-    out["ci_low"], out["ci_high"], ci_note = bootstrap_median_ci(a, b, rng, n_boot)
+        return PairedComparison(0, note="no subject")
+    lower, median = float(np.mean(d < 0)), float(np.median(d))
+    ci_low, ci_high, ci_note = bootstrap_median_ci(a, b, rng, n_boot)
     notes = [ci_note] if ci_note else []
     if np.all(d == 0):
-        out["wilcoxon_p"] = 1.0
-        out["note"] = "; ".join(["all differences zero", *notes])
-        return out
-    from scipy.stats import wilcoxon
-
+        note = "; ".join(["all differences zero", *notes])
+        return PairedComparison(d.size, lower, median, ci_low, ci_high, 1.0, note)
     p = float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
-    out["wilcoxon_p"] = p if math.isfinite(p) else None
     if d.size < 6:
         notes.insert(0, f"n = {d.size}: p cannot fall below {2.0 ** (1 - np.count_nonzero(d)):.3g}")
-    out["note"] = "; ".join(notes)
-    return out
+    return PairedComparison(
+        int(d.size), lower, median, ci_low, ci_high, p if math.isfinite(p) else None,
+        "; ".join(notes),
+    )  # fmt: skip
 
 
-def paired_statistics(results: list, seed: int = 0, n_boot: int = 2000) -> list[dict]:
+def paired_statistics(results: list, seed: int = 0, n_boot: int = 2000) -> list[PairedRow]:
     """:func:`paired_comparison` per ``alpha^2`` and error (the four errors and the ASE).
 
     Subjects without a result at an ``alpha^2`` (failed) are left out of that ``alpha^2``.
@@ -187,16 +185,14 @@ def paired_statistics(results: list, seed: int = 0, n_boot: int = 2000) -> list[
             res = [p.measure("residual", name) for p in pairs]
             nores = [p.measure("no_residual", name) for p in pairs]
             stats = paired_comparison(res, nores, rng, n_boot=n_boot)
-            rows.append({"alpha2": a2, "measure": name, **stats})
+            rows.append(PairedRow.of(a2, name, stats))
     return rows
 
 
-def paired_csv(rows: list[dict]) -> str:
+def paired_csv(rows: list[PairedRow]) -> str:
     """The rows of :func:`paired_statistics` as CSV text (``None`` as an empty cell)."""
     buf = io.StringIO()
-    fields = ["alpha2", "measure", "n", "fraction_residual_lower", "median_difference",
-              "ci_low", "ci_high", "wilcoxon_p", "note"]  # fmt: skip
-    writer = csv.DictWriter(buf, fieldnames=fields, lineterminator="\n")
+    writer = csv.DictWriter(buf, fieldnames=PairedRow.fields(), lineterminator="\n")
     writer.writeheader()
-    writer.writerows({k: ("" if v is None else v) for k, v in row.items()} for row in rows)
+    writer.writerows({k: ("" if v is None else v) for k, v in r.as_dict().items()} for r in rows)
     return buf.getvalue()
