@@ -80,8 +80,11 @@ def main(argv=None) -> int:
     parser.add_argument("--jobs", type=int, default=-1)
     parser.add_argument("--deformation", default="lddmm", choices=("lddmm", "svf", "both"))
     parser.add_argument("--keep", type=Path, default=None, help="keep the study in this folder")
+    parser.add_argument("--publish", action="store_true",
+                        help="write the table to docs/generated (README and docs include it)")  # fmt: skip
     parser.add_argument("extra", nargs="*", help="further flags of symladders study (after --)")
     args = parser.parse_args(argv)
+    rows = []
     settings = ["default", "full"] if args.full else ["default"]
     print(f"kernel backend: {args.kernel_backend}, jobs: {args.jobs}, {args.deformation}")
     for setting in settings:
@@ -97,6 +100,24 @@ def main(argv=None) -> int:
             f"{1 - r['non_converged'] / max(r['registrations'], 1):.1%} converged; "
             f"peak RSS {r['peak_rss_mb']:.0f} MB; target <= {target / 60:.0f} min: {met}"
         )
+        n = max(r["registrations"], 1)
+        rows.append(
+            f"| {setting}: {r['subjects']} subjects x {len(r['alpha2'])} alpha^2, "
+            f"{args.deformation} | {r['seconds']:.0f} s | {r['seconds'] / r['subjects']:.1f} s | "
+            f"{r['registrations']:,} | {r['iterations'] / n:.0f} / {r['flow_passes'] / n:.0f} | "
+            f"{1 - r['non_converged'] / n:.1%} | {r['peak_rss_mb']:.0f} MB | "
+            f"{target / 60:.0f} min: {met} |"
+        )
+    if args.publish:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from generated_tables import publish
+
+        head = ("| study | wall time | per subject | registrations | iterations / flow passes "
+                "each | converged | peak RSS | target |\n|---|---|---|---|---|---|---|---|")  # fmt: skip
+        name = f"study_{args.deformation}" + ("_full" if args.full else "")
+        publish(name, head + "\n" + "\n".join(rows),
+                f"python benchmarks/bench_study.py{' --full' if args.full else ''} "
+                f"--deformation {args.deformation} --publish")  # fmt: skip
     return 0
 
 

@@ -1,7 +1,9 @@
 """The ``symladders`` command: its parser and entry point.
 
 Subcommands: ``study``, ``correspond`` and ``atlas`` (a user's segmentations to
-a cohort in correspondence and its atlas), ``validate``.
+a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
+groups with a planted abnormality), ``analyze`` (group statistics of a study's
+transported motion), ``validate``.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from .analyze_cli import add_analyze_parser
 from .atlas_cli import add_atlas_parser
 from .cli_types import (
     EXIT_BROKEN_PIPE,
@@ -22,6 +25,7 @@ from .cli_types import (
     UsageError,
     log_internal_error,
 )
+from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
 from .study_cli import add_study_parser
 from .validate_cli import add_validate_parser
@@ -39,6 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_study_parser(sub)
     add_correspond_parser(sub)
     add_atlas_parser(sub)
+    add_cohort_parser(sub)
+    add_analyze_parser(sub)
     add_validate_parser(sub)
     return parser
 

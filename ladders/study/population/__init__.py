@@ -1,0 +1,84 @@
+"""Population statistics of transported motion: two groups, where their motion differs, and truth.
+
+- :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
+  motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
+- :mod:`.transported_motion`: the subjects' transported motion on the atlas, read
+  from a study's results (:class:`TransportedMotion`, :func:`load_transported_motion`);
+- :mod:`.group_comparison`: per-vertex tests with family-wise error control, a
+  global test and a classifier (:func:`compare_groups`);
+- :mod:`.against_truth`: power, Dice, AUC and the false-positive rate under the null
+  of every transport (:func:`score_transports`);
+- :mod:`.analysis`: the whole analysis of a study folder (:func:`analyze`), as
+  ``symladders analyze`` runs it; :mod:`.analysis_outputs`: its files.
+
+The statistics themselves are generic and live in :mod:`ladders.statistics`.
+"""
+
+from .against_truth import (
+    NullRate,
+    TransportScore,
+    null_false_positive_rate,
+    score_transports,
+    scores_csv,
+    scores_markdown,
+)
+from .analysis import (
+    AnalysisOutcome,
+    analyze,
+    check_groups_table,
+    read_planted_region,
+    select_motions,
+)
+from .analysis_outputs import write_analysis
+from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
+from .transported_motion import (
+    NO_TRANSPORT,
+    StudyResults,
+    TransportedMotion,
+    load_study_results,
+    load_transported_motion,
+    motions_from_results,
+)
+from .two_groups import (
+    CONTROLS,
+    DEFAULT_ABNORMALITY,
+    GROUPS_FILE,
+    PATIENTS,
+    REGION_FILE,
+    TwoGroupCohort,
+    make_two_group_cohort,
+    write_two_group_cohort,
+)
+
+__all__ = [
+    "NullRate",
+    "TransportScore",
+    "null_false_positive_rate",
+    "score_transports",
+    "scores_csv",
+    "scores_markdown",
+    "AnalysisOutcome",
+    "analyze",
+    "check_groups_table",
+    "read_planted_region",
+    "select_motions",
+    "write_analysis",
+    "NORMALIZATIONS",
+    "GroupComparison",
+    "compare_groups",
+    "normalize_motion",
+    "NO_TRANSPORT",
+    "StudyResults",
+    "TransportedMotion",
+    "load_study_results",
+    "load_transported_motion",
+    "motions_from_results",
+    "CONTROLS",
+    "DEFAULT_ABNORMALITY",
+    "GROUPS_FILE",
+    "PATIENTS",
+    "REGION_FILE",
+    "TwoGroupCohort",
+    "make_two_group_cohort",
+    "write_two_group_cohort",
+]
