@@ -1,6 +1,6 @@
 """The ``symladders`` command: its parser and entry point.
 
-Subcommands: ``study``, ``correspond`` and ``atlas`` (a user's segmentations to
+Subcommands: ``study``, ``mesh`` (label images to meshes), ``correspond`` and ``atlas`` (a user's segmentations to
 a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
 groups with a planted abnormality), ``analyze`` (group statistics of a study's
 transported motion), ``validate``.
@@ -27,6 +27,7 @@ from .cli_types import (
 )
 from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
+from .mesh_cli import add_mesh_parser
 from .study_cli import add_study_parser
 from .validate_cli import add_validate_parser
 
@@ -41,6 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     add_study_parser(sub)
+    add_mesh_parser(sub)
     add_correspond_parser(sub)
     add_atlas_parser(sub)
     add_cohort_parser(sub)

@@ -1,0 +1,118 @@
+"""``symladders mesh``: label images (NIfTI) to a folder of meshes the study reads.
+
+A thin wrapper of :func:`~ladders.study.imaging.mesh_label_images`. Exit status 1
+when an image failed (the others are written, the reason is in ``meshing.csv``),
+2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .cli_types import DefaultsFormatter, UsageError, jobs_count, nonnegative_int, output_folder
+
+__all__ = ["add_mesh_parser", "run_mesh_command"]
+
+
+def _frames(text: str) -> tuple[int, int]:
+    try:
+        values = tuple(int(t) for t in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 2 or min(values) < 0:
+        raise argparse.ArgumentTypeError(
+            f"expected the end-diastole and end-systole frames as ED,ES (0-based), got {text!r}"
+        )
+    return values
+
+
+def _plane(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(t) for t in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 6:
+        raise argparse.ArgumentTypeError(
+            f"expected a point and a normal as x,y,z,nx,ny,nz (mm), got {text!r}"
+        )
+    return values
+
+
+def _nonnegative_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
+
+
+def add_mesh_parser(sub) -> None:
+    """Register the ``mesh`` subcommand on an argparse subparsers object."""
+    p = sub.add_parser(
+        "mesh",
+        help="turn label images (NIfTI) into surface meshes in world millimetres",
+        description=(
+            "Extract the surface of one label of every image (NIfTI .nii/.nii.gz, 3-D per "
+            "frame as <subject>_ed / <subject>_es, or 4-D series with --frames ED,ES) in the "
+            "image's world frame (its affine: orientation, spacing, flips), keep the largest "
+            "connected component, smooth (Gaussian mask, Taubin) and decimate. OUTPUT holds "
+            "<subject>_ed.<ext>, <subject>_es.<ext> with a provenance record each (.json), "
+            "read by 'symladders correspond' (and then 'symladders study'), and meshing.csv. "
+            "A failing image is recorded with its reason and the others finish (exit 1); a "
+            "rerun skips the meshes already made from the same bytes and settings."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    p.add_argument("images", nargs="+", type=Path, metavar="IMAGES", help="label images")
+    p.add_argument("--label", type=nonnegative_int, required=True, help="the structure's label")
+    p.add_argument("--frames", type=_frames, default=None, metavar="ED,ES",
+                   help="end-diastole and end-systole frames of 4-D series (0-based)")  # fmt: skip
+    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/meshes",
+                   help="folder of the meshes")  # fmt: skip
+    p.add_argument("--vertices", type=nonnegative_int, default=2000,
+                   help="target vertex count of each mesh (0: no decimation)")  # fmt: skip
+    p.add_argument("--mask-sigma", type=_nonnegative_float, default=0.5,
+                   help="Gaussian smoothing of the mask before marching cubes, in voxels")  # fmt: skip
+    p.add_argument("--taubin-iterations", type=nonnegative_int, default=20,
+                   help="iterations of Taubin (volume-preserving) smoothing of the surface")  # fmt: skip
+    p.add_argument("--cut-plane", type=_plane, default=None, metavar="X,Y,Z,NX,NY,NZ",
+                   help="remove the surface beyond this plane (mm), e.g. the valve plane")  # fmt: skip
+    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
+    p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(run=run_mesh_command, output_is_file=False)
+
+
+def run_mesh_command(args) -> int:
+    """Mesh the images from parsed arguments."""
+    from ..imaging import ImageError, MeshingSettings, mesh_label_images
+
+    missing = [p for p in args.images if not p.is_file()]
+    if missing:
+        raise UsageError(f"symladders mesh: error: no such file: {missing[0]}")
+    try:
+        settings = MeshingSettings(
+            mask_sigma=args.mask_sigma, taubin_iterations=args.taubin_iterations,
+            n_vertices=args.vertices or None, cut_plane=args.cut_plane,
+        )  # fmt: skip
+        outcome = mesh_label_images(
+            args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,
+            progress=not args.no_progress, ext=args.ext,
+        )  # fmt: skip
+    except (ImageError, ValueError) as exc:
+        raise UsageError(f"symladders mesh: error: {exc}") from None
+    done = [r for r in outcome.records if r["status"] == "ok"]
+    skipped = [r for r in outcome.records if r["status"] == "skipped"]
+    print(
+        f"symladders mesh: {len(done)} mesh(es) written, {len(skipped)} already done, "
+        f"{len(outcome.failed)} failed, in {outcome.folder} (meshing.csv)"
+    )
+    for r in done:
+        print(f"  {r['mesh']}: {r['report']}")
+    for r in outcome.failed:
+        print(f"symladders mesh: failed: {r['error']}", file=sys.stderr)
+    return 1 if outcome.failed else 0

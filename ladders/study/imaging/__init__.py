@@ -1,0 +1,38 @@
+"""From label images to surface meshes in world millimetres: where cardiac data starts.
+
+- :mod:`.label_images`: one frame of a NIfTI label image with its affine
+  (:func:`read_label_image`), and what can be wrong with it (:class:`ImageError`);
+- :mod:`.surface_extraction`: one label to a surface (largest component, marching
+  cubes in the image's world frame, Taubin smoothing, a cut plane, decimation) with a
+  report (:func:`extract_surface`, :class:`MeshingSettings`);
+- :mod:`.mesh_images`: a batch of images to a folder the study reads, resumable,
+  with provenance (:func:`mesh_label_images`);
+- :mod:`.voxelize`: label images of known surfaces, the ground truth
+  (:func:`voxelize`, :func:`short_axis_affine`, :func:`write_label_image`).
+"""
+
+from .label_images import IMAGE_SUFFIXES, ImageError, LabelImage, image_stem, read_label_image
+from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
+from .surface_extraction import MeshingSettings, SurfaceReport, cut_at_plane, extract_surface
+from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
+
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "ImageError",
+    "LabelImage",
+    "image_stem",
+    "read_label_image",
+    "REPORT_FILE",
+    "MeshingOutcome",
+    "MeshingTask",
+    "mesh_label_images",
+    "plan_meshing",
+    "MeshingSettings",
+    "SurfaceReport",
+    "cut_at_plane",
+    "extract_surface",
+    "close_surface",
+    "short_axis_affine",
+    "voxelize",
+    "write_label_image",
+]

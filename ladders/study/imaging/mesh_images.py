@@ -1,0 +1,228 @@
+"""A folder of label images to a folder of meshes the study reads: batch, resumable, recorded.
+
+:func:`mesh_label_images` turns every image into the surface of one label
+(:func:`~.surface_extraction.extract_surface`) and writes it in the layout
+``symladders correspond`` / ``atlas`` / ``study`` read:
+
+* a 3-D image per frame, ``<subject>_ed.nii.gz`` and ``<subject>_es.nii.gz``, gives
+  ``<subject>_ed<ext>`` and ``<subject>_es<ext>``;
+* a 4-D series ``<subject>.nii.gz`` with ``frames=(ed, es)`` gives the same two meshes.
+
+Each mesh is written atomically with a provenance record beside it
+(``<mesh>.json``: the source's SHA-256, label, frame, voxel spacing, affine, the
+settings and the extraction report); a rerun skips the meshes whose record matches
+(same source bytes, label, frame and settings). A file that fails (label absent,
+not a label image, 4-D without a frame, frame out of range, no or a singular affine,
+the two frames of a subject on different grids) is recorded with its reason in
+``meshing.csv`` and the others go on.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import nibabel as nib
+import numpy as np
+
+from ..files import atomic_path, atomic_write_text, file_sha256
+from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
+from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
+from .surface_extraction import MeshingSettings, extract_surface
+
+__all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images", "REPORT_FILE"]
+
+#: The batch's table of files, written into the output folder.
+REPORT_FILE = "meshing.csv"
+_PHASES = ("ed", "es")
+
+
+@dataclass(frozen=True)
+class MeshingTask:
+    """One mesh to write: its source image, frame and output name."""
+
+    source: Path
+    frame: int | None
+    output: str
+    error: str = ""
+
+
+@dataclass
+class MeshingOutcome:
+    """What :func:`mesh_label_images` did: one record per mesh, in order."""
+
+    folder: Path
+    records: list = field(default_factory=list)
+
+    @property
+    def failed(self) -> list:
+        """The records of the meshes that could not be made."""
+        return [r for r in self.records if r["status"] == "failed"]
+
+
+def _subject_phase(stem: str) -> tuple[str, str | None]:
+    low = stem.lower()
+    for phase in _PHASES:
+        if low.endswith(f"_{phase}"):
+            return stem[: -len(phase) - 1], phase
+    return stem, None
+
+
+def _shape(path: Path):
+    try:
+        img = nib.load(str(path))
+        return img.shape, np.round(np.asarray(img.affine, float), 6)
+    except Exception:  # noqa: BLE001 - read_label_image names the problem later
+        return None, None
+
+
+def plan_meshing(
+    images, frames: tuple[int, int] | None = None, ext: str = ".vtk"
+) -> list[MeshingTask]:
+    """The meshes to write for ``images`` (see the module), with the errors known beforehand."""
+    tasks: list[MeshingTask] = []
+    by_subject: dict[str, dict[str, MeshingTask]] = {}
+    for path in sorted(Path(p) for p in images):
+        stem = image_stem(path)
+        shape, _ = _shape(path)
+        if shape is not None and len(shape) == 4 and (shape[3] > 1 or frames is not None):
+            if frames is None:
+                tasks.append(MeshingTask(path, None, f"{stem}{ext}",
+                                         f"{path}: a 4-D series of {shape[3]} frames: name the "
+                                         "frames (--frames ED,ES)"))  # fmt: skip
+                continue
+            for phase, frame in zip(_PHASES, frames):
+                tasks.append(MeshingTask(path, int(frame), f"{stem}_{phase}{ext}"))
+            continue
+        subject, phase = _subject_phase(stem)
+        task = MeshingTask(path, None, f"{stem}{ext}")
+        tasks.append(task)
+        if phase is not None:
+            by_subject.setdefault(subject, {})[phase] = task
+    # the two frames of a subject must share one grid (shape and affine)
+    for subject, pair in by_subject.items():
+        if len(pair) != 2:
+            continue
+        (s1, a1), (s2, a2) = _shape(pair["ed"].source), _shape(pair["es"].source)
+        if s1 is not None and s2 is not None and (s1 != s2 or not np.allclose(a1, a2, atol=1e-4)):
+            message = (
+                f"subject {subject!r}: {pair['ed'].source.name} and {pair['es'].source.name} are on "
+                f"different grids (shapes {s1} and {s2}, or different affines): segment both "
+                "frames on one grid"
+            )
+            tasks = [MeshingTask(t.source, t.frame, t.output, message) if t in pair.values() else t
+                     for t in tasks]  # fmt: skip
+    return tasks
+
+
+def _record_matches(record_path: Path, sha: str, task: MeshingTask, label: int, settings) -> bool:
+    try:
+        record = json.loads(record_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return (
+        record.get("sha256") == sha
+        and record.get("label") == label
+        and record.get("frame") == task.frame
+        and record.get("settings") == settings.as_dict()
+    )
+
+
+def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict:
+    out = folder / task.output
+    record_path = out.with_suffix(".json")
+    row = {"source": str(task.source), "frame": task.frame, "mesh": task.output, "status": "ok",
+           "error": "", "report": ""}  # fmt: skip
+    if task.error:
+        return {**row, "status": "failed", "error": task.error}
+    try:
+        sha = file_sha256(task.source)
+        if out.is_file() and _record_matches(record_path, sha, task, label, settings):
+            return {**row, "status": "skipped"}
+        image = read_label_image(task.source, task.frame)
+        vertices, faces, report = extract_surface(image, label, settings)
+        write_mesh(out, vertices, faces, atomic=True)
+        record = {
+            "source": str(task.source.resolve()), "sha256": sha, "label": label,
+            "frame": task.frame, "spacing_mm": list(image.spacing),
+            "affine": np.asarray(image.affine).tolist(), "settings": settings.as_dict(),
+            "report": report.as_dict(),
+        }  # fmt: skip
+        atomic_write_text(record_path, json.dumps(record, indent=1))
+        return {**row, "report": report.describe()}
+    except (ImageError, ValueError, OSError) as exc:
+        return {**row, "status": "failed", "error": str(exc)}
+
+
+def _report_csv(records: list) -> str:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=["source", "frame", "mesh", "status", "error", "report"],
+                            lineterminator="\n")  # fmt: skip
+    writer.writeheader()
+    writer.writerows(records)
+    return buf.getvalue()
+
+
+def mesh_label_images(
+    images,
+    label: int,
+    output,
+    frames: tuple[int, int] | None = None,
+    settings: MeshingSettings | None = None,
+    jobs: int = 2,
+    progress: bool = True,
+    ext: str = ".vtk",
+) -> MeshingOutcome:
+    """Mesh the label ``label`` of every image into ``output`` (see the module).
+
+    Parameters
+    ----------
+    images : iterable of paths
+        NIfTI label images (``.nii``, ``.nii.gz``).
+    label : int
+        The structure's label (e.g. the left-ventricle cavity).
+    output : path
+        The mesh folder (created).
+    frames : (int, int), optional
+        End-diastole and end-systole frames of 4-D series (0-based).
+    settings : MeshingSettings, optional
+    jobs : int, default 2
+        Images meshed in parallel (joblib processes).
+    progress : bool
+        A progress bar over the files (tqdm).
+    ext : str, default ".vtk"
+        Mesh format.
+
+    Returns
+    -------
+    MeshingOutcome
+    """
+    from joblib import Parallel, delayed
+    from tqdm.auto import tqdm
+
+    settings = settings or MeshingSettings()
+    ext = "." + ext.lower().lstrip(".")
+    if ext not in WRITE_EXTENSIONS:
+        raise ValueError(f"ext: expected one of {WRITE_EXTENSIONS}, got {ext!r}")
+    images = [Path(p) for p in images]
+    bad = [p for p in images if not p.name.lower().endswith(IMAGE_SUFFIXES)]
+    if bad:
+        raise ImageError(f"{bad[0]}: not a NIfTI label image (.nii or .nii.gz)")
+    folder = Path(output)
+    folder.mkdir(parents=True, exist_ok=True)
+    tasks = plan_meshing(images, frames, ext)
+    run = Parallel(n_jobs=jobs, return_as="generator")
+    bar = tqdm(total=len(tasks), desc="images", unit="mesh", disable=not progress)
+    records = []
+    try:
+        for record in run(delayed(_mesh_one)(t, int(label), folder, settings) for t in tasks):
+            records.append(record)
+            bar.update(1)
+    finally:
+        bar.close()
+        with atomic_path(folder / REPORT_FILE) as tmp:
+            tmp.write_text(_report_csv(records), encoding="utf-8")
+    return MeshingOutcome(folder, records)
