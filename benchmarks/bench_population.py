@@ -8,6 +8,8 @@ Cohorts (``make_two_group_cohort``, seed 0, 40 subjects, 20 patients, 1,009 vert
 
 * ``hypokinesia``: the default abnormality (radial contraction and longitudinal
   shortening halved in AHA segments 7, 8, 13, 14), which a surface shows;
+* ``hypokinesia_mild``: the same with a fifth of the motion removed (a weaker effect,
+  where the transports' powers differ);
 * ``twist``: 5 degrees of extra rotation about the long axis in the same segments,
   tangential to the wall, which a surface without material landmarks does not show;
 * ``null``: the same subjects without any abnormality (both groups from one distribution).
@@ -51,6 +53,7 @@ from ladders.study.population.analysis_outputs import plot_transport_scores  # n
 
 COHORTS = {
     "hypokinesia": MotionAbnormality(),
+    "hypokinesia_mild": MotionAbnormality(magnitude=0.2),
     "twist": MotionAbnormality("twist"),
     "null": None,
 }
@@ -62,6 +65,8 @@ PLAN = (
     ("corresponded", "hypokinesia", "lddmm", (0.01, 1.0, 100.0), 40),
     ("corresponded", "null", "lddmm", (0.01, 1.0, 100.0), 40),
     ("corresponded", "hypokinesia", "svf", (1.0,), 40),
+    ("corresponded", "hypokinesia_mild", "lddmm", (0.01, 1.0, 100.0), 40),
+    ("corresponded", "hypokinesia_mild", "svf", (1.0,), 40),
     ("corresponded", "null", "svf", (1.0,), 40),
     ("corresponded", "twist", "lddmm", (1.0,), 40),
     ("segmentations", "hypokinesia", "lddmm", (1.0,), 20),

@@ -30,3 +30,10 @@ def test_generated_tables_name_the_machine():
     for path in (ROOT / "docs" / "generated").glob("*.md"):
         first = path.read_text(encoding="utf-8").splitlines()[0]
         assert re.search(r"cores, \w+, measured \d{4}-\d\d-\d\d", first), path.name
+
+
+def test_the_table_of_contents_lists_every_page():
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    toc = re.search(r"```\{toctree\}\n(.*?)```", index, re.S).group(1).split()
+    pages = {p.stem for p in (ROOT / "docs").glob("*.md")} - {"index"}
+    assert pages <= set(toc), sorted(pages - set(toc))

@@ -50,6 +50,29 @@ def _nonnegative_float(text: str) -> float:
     return value
 
 
+def _read_planes(path: Path) -> dict:
+    """``{image: (x, y, z, nx, ny, nz)}`` from a CSV table, or a usage error naming the line."""
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+    except OSError as exc:
+        raise UsageError(f"symladders mesh: error: --cut-planes {path}: {exc.strerror}") from None
+    planes = {}
+    for line, row in enumerate(rows, start=2):
+        try:
+            planes[row["image"].strip()] = tuple(
+                float(row[k]) for k in ("x", "y", "z", "nx", "ny", "nz")
+            )
+        except (KeyError, TypeError, ValueError, AttributeError):
+            raise UsageError(
+                f"symladders mesh: error: --cut-planes {path}, line {line}: expected the columns "
+                "image,x,y,z,nx,ny,nz with numbers"
+            ) from None
+    return planes
+
+
 def add_mesh_parser(sub) -> None:
     """Register the ``mesh`` subcommand on an argparse subparsers object."""
     p = sub.add_parser(
@@ -81,6 +104,8 @@ def add_mesh_parser(sub) -> None:
                    help="iterations of Taubin (volume-preserving) smoothing of the surface")  # fmt: skip
     p.add_argument("--cut-plane", type=_plane, default=None, metavar="X,Y,Z,NX,NY,NZ",
                    help="remove the surface beyond this plane (mm), e.g. the valve plane")  # fmt: skip
+    p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
+                   help="CSV with the columns image,x,y,z,nx,ny,nz: a cut plane per image file")  # fmt: skip
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
     p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -94,6 +119,7 @@ def run_mesh_command(args) -> int:
     missing = [p for p in args.images if not p.is_file()]
     if missing:
         raise UsageError(f"symladders mesh: error: no such file: {missing[0]}")
+    planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
     try:
         settings = MeshingSettings(
             mask_sigma=args.mask_sigma, taubin_iterations=args.taubin_iterations,
@@ -101,7 +127,7 @@ def run_mesh_command(args) -> int:
         )  # fmt: skip
         outcome = mesh_label_images(
             args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,
-            progress=not args.no_progress, ext=args.ext,
+            progress=not args.no_progress, ext=args.ext, cut_planes=planes,
         )  # fmt: skip
     except (ImageError, ValueError) as exc:
         raise UsageError(f"symladders mesh: error: {exc}") from None

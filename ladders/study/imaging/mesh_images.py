@@ -131,6 +131,16 @@ def _record_matches(record_path: Path, sha: str, task: MeshingTask, label: int, 
     )
 
 
+def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict | None):
+    """The settings of one image: its own cut plane where one is given for its file."""
+    if not cut_planes:
+        return settings
+    plane = cut_planes.get(task.source.name, cut_planes.get(str(task.source)))
+    if plane is None:
+        return settings
+    return MeshingSettings(**{**settings.as_dict(), "cut_plane": tuple(plane)})
+
+
 def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict:
     out = folder / task.output
     record_path = out.with_suffix(".json")
@@ -175,6 +185,7 @@ def mesh_label_images(
     jobs: int = 2,
     progress: bool = True,
     ext: str = ".vtk",
+    cut_planes: dict | None = None,
 ) -> MeshingOutcome:
     """Mesh the label ``label`` of every image into ``output`` (see the module).
 
@@ -195,6 +206,9 @@ def mesh_label_images(
         A progress bar over the files (tqdm).
     ext : str, default ".vtk"
         Mesh format.
+    cut_planes : dict, optional
+        ``{image file name: (x, y, z, nx, ny, nz)}``: a cut plane per image (e.g. each
+        frame's valve plane, in world mm), in place of ``settings.cut_plane``.
 
     Returns
     -------
@@ -218,7 +232,9 @@ def mesh_label_images(
     bar = tqdm(total=len(tasks), desc="images", unit="mesh", disable=not progress)
     records = []
     try:
-        for record in run(delayed(_mesh_one)(t, int(label), folder, settings) for t in tasks):
+        jobs_ = (delayed(_mesh_one)(t, int(label), folder, _settings_for(t, settings, cut_planes))
+                 for t in tasks)  # fmt: skip
+        for record in run(jobs_):
             records.append(record)
             bar.update(1)
     finally:

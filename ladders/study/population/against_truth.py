@@ -219,8 +219,11 @@ def scores_markdown(scores: list[TransportScore]) -> str:
     for s in scores:
         alpha2 = "-" if s.alpha2 is None else f"{s.alpha2:g}"
         fwer = "-" if s.fwer is None else f"{s.fwer:.3f} [{s.fwer_low:.3f}, {s.fwer_high:.3f}]"
+        name = s.label
+        if s.method != "none" and not s.label.upper().startswith(s.deformation.upper()):
+            name = f"{s.deformation.upper()} {s.label}"
         lines.append(
-            f"| {s.deformation.upper() if s.method != 'none' else ''} {s.label} | {alpha2} | "
+            f"| {name} | {alpha2} | "
             f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.strain_power)} | "
             f"{s.auc:.2f} [{s.auc_low:.2f}, {s.auc_high:.2f}] | {s.global_p:.2g} | {fwer} |"
         )
