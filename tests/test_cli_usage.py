@@ -48,7 +48,10 @@ def test_a_mistyped_subcommand_is_answered_with_the_closest(typed, meant, capsys
     assert f"symladders {meant} --help" in err and "usage" not in err
     assert main(["xyz"]) == 2
     err = capsys.readouterr().err
-    assert "unknown command 'xyz', choose from study, correspond, atlas, validate" in err
+    assert (
+        "unknown command 'xyz', choose from study, mesh, correspond, atlas, cohort, analyze, "
+        "validate" in err
+    )
 
 
 def test_options_are_not_abbreviated(tmp_path, capsys):

@@ -26,6 +26,7 @@ import hashlib
 
 import numpy as np
 
+from ..kernels.backends import resolve_backend
 from ..validation import check_array, check_float, check_int
 from .base import DataTerm
 from .mesh_geometry import (
@@ -103,7 +104,7 @@ class SurfaceDistance(DataTerm):
         self.inv_s2 = 1.0 / self.sigma_w**2
         if backend not in _BACKENDS:
             raise ValueError(f"{name}: backend: expected one of {list(_BACKENDS)}, got {backend!r}")
-        self.backend = "numba" if backend == "auto" else backend
+        self.backend = resolve_backend(backend, f"{name}: backend")  # the one "auto" rule
         self.block_size = check_int(
             DEFAULT_BLOCK_SIZE if block_size is None else block_size,
             f"{name}: block_size",

@@ -3,7 +3,7 @@
 The same sums as the numpy reference, as fused loops over pairs of triangles:
 each kernel value is computed and consumed at once, so no ``F_X x F_Y``
 matrix is stored and memory stays linear in the number of triangles. The
-layout and the exponential are those of :mod:`manifolds.lddmm.kernels_numba`
+layout and the exponential are the kernel layer's (:mod:`manifolds.kernels.numba_primitives`)
 (coordinates as contiguous ``(3, n)`` arrays, a vectorisable polynomial
 ``exp``). Every row ``i`` of ``X`` writes only its own outputs (value, centre
 and normal gradients), so rows run in parallel without buffers; the value is
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from manifolds.lddmm.kernels_numba import gexp, to_soa, use_parallel
+from manifolds.kernels.numba_primitives import gexp, to_soa, use_parallel
 
 __all__ = ["pair_sum"]
 

@@ -8,6 +8,7 @@
   in one frozen object (its stable ``key`` names caches and result folders);
 - :mod:`.registration`: the registration objective (eq. 3), its exact gradient and
   the driver; :mod:`.registration_problem`: the problem as solvers see it;
+  :mod:`.registration_result`: :class:`RegistrationResult`, what a registration returns;
   :mod:`.preconditioner`: the optimiser's change of variables;
 - :mod:`.hamiltonian_shooting`: Hamiltonian shooting of control points and momenta and
   its adjoint (:mod:`manifolds.numerics.shooting` is another thing: geodesic shooting
@@ -35,13 +36,13 @@ from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_j
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import (
-    RegistrationResult,
     build_registration_problem,
     register,
     registration_objective,
 )
 from .registration_cache import RegistrationCache
 from .registration_problem import RegistrationProblem
+from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
 from .space import LDDMMLandmarks
 from .stationary_flow import (

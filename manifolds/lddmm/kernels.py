@@ -24,20 +24,12 @@ import numpy as np
 import scipy.linalg
 
 from ..errors import ManifoldError
+from ..kernels.backends import numba_available, resolve_backend
 from ..validation import check_float, check_int
 
 __all__ = ["GaussianKernel", "numba_available"]
 
 DEFAULT_BLOCK_SIZE = 2**21  # kernel-matrix entries per block (16 MB per temporary)
-
-
-def numba_available() -> bool:
-    """Whether the compiled backend can be used (``numba`` importable)."""
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def _sqdist(x: np.ndarray, y: np.ndarray, x2: np.ndarray, y2: np.ndarray) -> np.ndarray:
@@ -75,8 +67,7 @@ class GaussianKernel:
             )
         if backend == "numba" and not numba_available():
             raise ImportError("GaussianKernel: backend='numba' needs the optional package numba")
-        if backend == "auto":
-            backend = "numba" if numba_available() else "numpy"
+        backend = resolve_backend(backend, "GaussianKernel: backend")  # the one "auto" rule
         self.backend = backend
         self._nb = None
         self._nb_jvp = None

@@ -6,8 +6,9 @@ of points: each kernel value is computed and consumed at once, so no
 points. Coordinates are stored as ``(3, n)`` arrays (2-D inputs get a zero
 third coordinate, which changes no distance, product or gradient) so that the
 inner loops vectorise; the exponential is evaluated by a vectorisable
-polynomial (:func:`_gexp`, relative error below ``3e-14`` and exactly zero
-below ``exp(-40) ~ 4e-18``). Outer loops run in parallel over rows above a
+polynomial (:func:`manifolds.kernels.numba_primitives.gexp`, relative error below
+``3e-14`` and exactly zero below ``exp(-40) ~ 4e-18``; the compiled primitives shared
+with the surface data terms live in the kernel layer :mod:`manifolds.kernels`). Outer loops run in parallel over rows above a
 size threshold; sums over columns that several rows write to go through one
 buffer per chunk of rows. Parallel loops only pay off when every call has
 milliseconds of work: below ``PARALLEL_MIN_PAIRS`` pairs the serial loop is used,
@@ -16,9 +17,18 @@ since on a shared machine each parallel region waits for its slowest thread.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from numba import njit, prange
+
+from ..kernels.numba_primitives import (
+    JIT_FLAGS,
+    PARALLEL_MIN_PAIRS,
+    check_dim,
+    from_soa,
+    gexp,
+    to_soa,
+    use_parallel,
+)
 
 __all__ = [
     "convolve",
@@ -32,39 +42,9 @@ __all__ = [
     "check_dim",
     "use_parallel",
     "JIT_FLAGS",
+    "PARALLEL_MIN_PAIRS",
     "solve_lower",
 ]
-
-PARALLEL_MIN_PAIRS = 2_000_000
-JIT_FLAGS = {"fastmath": True, "cache": True, "nogil": True}
-
-
-@njit(inline="always", **JIT_FLAGS)
-def gexp(x):  # pragma: no cover - compiled
-    """``exp(x)`` for ``x <= 0``: Taylor polynomial of ``exp(x / 64)`` raised to the 64th power."""
-    t = x * 0.015625 + 0.3125
-    p = 1.0 / 6227020800.0
-    p = p * t + 1.0 / 479001600.0
-    p = p * t + 1.0 / 39916800.0
-    p = p * t + 1.0 / 3628800.0
-    p = p * t + 1.0 / 362880.0
-    p = p * t + 1.0 / 40320.0
-    p = p * t + 1.0 / 5040.0
-    p = p * t + 1.0 / 720.0
-    p = p * t + 1.0 / 120.0
-    p = p * t + 1.0 / 24.0
-    p = p * t + 1.0 / 6.0
-    p = p * t + 0.5
-    p = p * t + 1.0
-    p = p * t + 1.0
-    p = p * 0.7316156289466418  # exp(-0.3125)
-    p = p * p
-    p = p * p
-    p = p * p
-    p = p * p
-    p = p * p
-    p = p * p
-    return p if x > -40.0 else 0.0
 
 
 @njit(**JIT_FLAGS)
@@ -215,31 +195,6 @@ def _cvjp_ser(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - 
 
 
 CVJP_CHUNKS = 8
-
-
-def to_soa(arr: np.ndarray) -> np.ndarray:
-    """``(n, d)`` -> contiguous ``(3, n)`` with zero padding for ``d < 3``."""
-    arr = np.asarray(arr, dtype=np.float64)
-    out = np.zeros((3, arr.shape[0]))
-    out[: arr.shape[1]] = arr.T
-    return out
-
-
-def from_soa(arr: np.ndarray, d: int) -> np.ndarray:
-    """Contiguous ``(3, n)`` -> ``(n, d)``: the inverse of :func:`to_soa`."""
-    return np.ascontiguousarray(arr[:d].T)
-
-
-def check_dim(*arrays):
-    """Raise a ``ValueError`` unless every array is ``(n, d)`` with ``d <= 3``."""
-    for arr in arrays:
-        if arr.ndim != 2 or arr.shape[1] not in (1, 2, 3):
-            raise ValueError(f"kernels_numba: expected (n, d) arrays with d <= 3, got {arr.shape}")
-
-
-def use_parallel(n_pairs: int) -> bool:
-    """Whether a sum over ``n_pairs`` pairs runs its parallel loop (above ``PARALLEL_MIN_PAIRS``)."""
-    return n_pairs >= PARALLEL_MIN_PAIRS and numba.get_num_threads() > 1
 
 
 def gaussian(sq_dist: np.ndarray) -> np.ndarray:

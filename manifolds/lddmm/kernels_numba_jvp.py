@@ -3,7 +3,7 @@
 The forward-mode counterparts of :func:`~manifolds.lddmm.kernels_numba.convolve`
 and :func:`~manifolds.lddmm.kernels_numba.hamiltonian_rhs`, with the same
 conventions: ``(3, n)`` coordinate arrays, the vectorisable exponential
-:func:`~manifolds.lddmm.kernels_numba._gexp`, fused row loops (every output row is
+:func:`~manifolds.kernels.numba_primitives.gexp`, fused row loops (every output row is
 a reduction over the columns, so no buffer is shared between rows), serial below
 ``PARALLEL_MIN_PAIRS`` pairs. The numpy code of :mod:`manifolds.lddmm.kernels` is
 the reference they are tested against.
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .kernels_numba import JIT_FLAGS, check_dim, from_soa, gexp, to_soa, use_parallel
+from ..kernels.numba_primitives import JIT_FLAGS, check_dim, from_soa, gexp, to_soa, use_parallel
 
 __all__ = ["convolve_jvp", "hamiltonian_jvp"]
 

@@ -26,8 +26,8 @@ from ..numerics.integrators import get_integrator
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
 from .control_points import check_vertex_indices
 from .inverse_consistency import inverse_consistency
-from .registration import RegistrationResult
 from .registration_cache import RegistrationCache, registration_key
+from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
 from .shapes import random_shape
 from .tangent import LandmarkTangent

@@ -22,6 +22,7 @@ import numpy as np
 
 from .flow_models import FlowPass, rkhs_norm_sq_gradient, rkhs_norm_sq_hvp
 from .joint_preconditioner import JointPreconditioner
+from .registration_result import RegistrationResult
 
 __all__ = ["RegistrationProblem", "Evaluation"]
 
@@ -236,8 +237,6 @@ class RegistrationProblem:
     # ------------------------------------------------------------ result
     def result(self, opt):
         """The :class:`~manifolds.lddmm.RegistrationResult` of the solver's run ``opt``."""
-        from .registration import RegistrationResult
-
         mu, c = self.unpack(opt.x)
         ev = self.evaluate(opt.x, with_gradient=False)
         deformed = ev.flow_pass.deformed

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ManifoldError
+from ..kernels.backends import resolve_backend
 from ..validation import check_float, check_int
 
 __all__ = ["RegistrationSettings", "STOPPING_RULES", "SETTINGS_SCHEMA"]
@@ -265,11 +266,7 @@ class RegistrationSettings:
 
     def resolved_backend(self) -> str:
         """The kernel backend that runs: ``"auto"`` resolved on this machine."""
-        if self.kernel_backend != "auto":
-            return self.kernel_backend
-        from .kernels import numba_available
-
-        return "numba" if numba_available() else "numpy"
+        return resolve_backend(self.kernel_backend, "RegistrationSettings: kernel_backend")
 
     def make_kernel(self, block_size: int | None = None):
         """The :class:`~manifolds.lddmm.GaussianKernel` of these settings."""

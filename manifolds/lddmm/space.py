@@ -18,7 +18,8 @@ from ..validation import check_array, check_finite_result
 from .control_points import is_dense
 from .hamiltonian_shooting import hamiltonian_system, shoot
 from .landmark_space import KernelLandmarkSpace
-from .registration import RegistrationResult, register
+from .registration import register
+from .registration_result import RegistrationResult
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]

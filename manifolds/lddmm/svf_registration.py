@@ -22,7 +22,8 @@ import numpy as np
 from ..numerics.integrators import Integrator
 from .flow_models import StationaryKernelFlow
 from .kernels import GaussianKernel
-from .registration import RegistrationResult, model_objective, run_registration
+from .registration import model_objective, run_registration
+from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
 
 __all__ = ["svf_objective", "register_svf"]

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .landmark_space import KernelLandmarkSpace
-from .registration import RegistrationResult
+from .registration_result import RegistrationResult
 from .stationary_flow import StationaryFlow, kernel_flow
 from .svf_registration import register_svf
 

@@ -42,17 +42,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import meshio
 import numpy as np
 
 from ..errors import MeshFolderError
 from ..files import atomic_path
-
-if TYPE_CHECKING:
-    from ..cohort import Subject
-    from ..running.results import PairResult
 
 __all__ = [
     "MESH_OUTPUT_FORMATS",
@@ -130,10 +126,10 @@ def alpha_folder(alpha2) -> str:
 
 def write_subject_meshes(
     folder,
-    subject: Subject,
+    subject: Any,
     atlas,
     faces,
-    result: PairResult,
+    result: Any,
     shapes: list[TransportShapes],
     ext: str = ".vtu",
 ) -> list[Path]:
