@@ -24,7 +24,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 GENERATED = ROOT / "docs" / "generated"
 
-__all__ = ["machine", "simd_level", "publish", "PAGES"]
+__all__ = ["machine", "simd_level", "publish", "refresh", "PAGES"]
 
 #: The pages whose marked regions are kept equal to the generated tables.
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -75,3 +75,24 @@ def publish(name: str, table: str, command: str) -> Path:
                 pattern.sub(lambda _: f"{begin}\n{text}{end}", content), encoding="utf-8"
             )
     return path
+
+
+def refresh() -> list[str]:
+    """Copy every table of ``docs/generated/`` into its marked regions (no benchmark is run)."""
+    names = []
+    for path in sorted(GENERATED.glob("*.md")):
+        text = path.read_text(encoding="utf-8")
+        begin, end = f"<!-- BEGIN generated/{path.stem} -->", f"<!-- END generated/{path.stem} -->"
+        pattern = re.compile(re.escape(begin) + r".*?" + re.escape(end), flags=re.S)
+        for page in PAGES:
+            content = page.read_text(encoding="utf-8")
+            if begin in content:
+                page.write_text(
+                    pattern.sub(lambda _: f"{begin}\n{text}{end}", content), encoding="utf-8"
+                )
+                names.append(f"{page.name}: {path.stem}")
+    return names
+
+
+if __name__ == "__main__":
+    print("\n".join(refresh()))
