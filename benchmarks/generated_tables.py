@@ -60,20 +60,27 @@ def machine() -> str:
     return f"{_cpu_model()}, {cores} cores, {simd_level()}, measured {today}"
 
 
+def _copy_into_pages(name: str, text: str) -> list[str]:
+    """Replace the region ``generated/<name>`` of every page by ``text``; the pages changed."""
+    begin, end = f"<!-- BEGIN generated/{name} -->", f"<!-- END generated/{name} -->"
+    pattern = re.compile(re.escape(begin) + r".*?" + re.escape(end), flags=re.S)
+    region = f"{begin}\n{text}{end}"
+    changed = []
+    for page in PAGES:
+        content = page.read_text(encoding="utf-8")
+        if begin in content:
+            page.write_text(pattern.sub(lambda _: region, content), encoding="utf-8")
+            changed.append(f"{page.name}: {name}")
+    return changed
+
+
 def publish(name: str, table: str, command: str) -> Path:
     """Write ``table`` as ``docs/generated/<name>.md`` and into every marked region of it."""
     text = f"*Measured by `{command}` on {machine()}.*\n\n{table.strip()}\n"
     GENERATED.mkdir(parents=True, exist_ok=True)
     path = GENERATED / f"{name}.md"
     path.write_text(text, encoding="utf-8")
-    begin, end = f"<!-- BEGIN generated/{name} -->", f"<!-- END generated/{name} -->"
-    pattern = re.compile(re.escape(begin) + r".*?" + re.escape(end), flags=re.S)
-    for page in PAGES:
-        content = page.read_text(encoding="utf-8")
-        if begin in content:
-            page.write_text(
-                pattern.sub(lambda _: f"{begin}\n{text}{end}", content), encoding="utf-8"
-            )
+    _copy_into_pages(name, text)
     return path
 
 
@@ -81,16 +88,7 @@ def refresh() -> list[str]:
     """Copy every table of ``docs/generated/`` into its marked regions (no benchmark is run)."""
     names = []
     for path in sorted(GENERATED.glob("*.md")):
-        text = path.read_text(encoding="utf-8")
-        begin, end = f"<!-- BEGIN generated/{path.stem} -->", f"<!-- END generated/{path.stem} -->"
-        pattern = re.compile(re.escape(begin) + r".*?" + re.escape(end), flags=re.S)
-        for page in PAGES:
-            content = page.read_text(encoding="utf-8")
-            if begin in content:
-                page.write_text(
-                    pattern.sub(lambda _: f"{begin}\n{text}{end}", content), encoding="utf-8"
-                )
-                names.append(f"{page.name}: {path.stem}")
+        names += _copy_into_pages(path.stem, path.read_text(encoding="utf-8"))
     return names
 
 
