@@ -17,11 +17,20 @@ extensions = [
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 myst_enable_extensions = ["dollarmath"]
+# Anchors for the headings (links such as solvers.md#stopping-rules), GitHub's slugs.
+myst_heading_anchors = 4
 numpydoc_show_class_members = False
 numpydoc_validation_checks = set()
 autosummary_generate = True
-autodoc_default_options = {"members": True, "inherited-members": False, "show-inheritance": True}
-exclude_patterns = ["_build"]
+# A package's __all__ re-exports its modules' names: document each where it is defined.
+autodoc_default_options = {
+    "members": True,
+    "inherited-members": False,
+    "show-inheritance": True,
+    "ignore-module-all": True,
+}
+# The benchmarks' generated tables are included in the pages, not pages of their own.
+exclude_patterns = ["_build", "generated"]
 # The geomstats adapter is documented even when the optional extra is not installed.
 autodoc_mock_imports = [] if importlib.util.find_spec("geomstats") else ["geomstats"]
 html_theme = "alabaster"

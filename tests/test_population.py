@@ -49,6 +49,8 @@ def test_the_default_effect_is_found_by_the_pole_ladder_with_residuals(default_s
     found = c.detected(0.05)
     assert detection_power(found, data.region.affected) >= 0.8
     assert dice(found, data.region.affected) >= 0.6
+    # hypokinesia moves the wall along its normal: the normal component finds it too
+    assert detection_power(c.detected(0.05, "normal"), data.region.affected) >= 0.8
     assert c.global_test.p_permutation < 0.01
     assert (
         c.classifier.auc > 0.8 and c.classifier.ci_low <= c.classifier.auc <= c.classifier.ci_high
@@ -89,8 +91,8 @@ def test_analyze_writes_tables_maps_and_figures(default_study, tmp_path):
     k = data.cohort.n_vertices
     with open(outcome.paths["vertices.csv"]) as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) == len(outcome.comparisons) * 2 * k
-    assert {r["test"] for r in rows} == {"hotelling_t2", "t"}
+    assert len(rows) == len(outcome.comparisons) * 3 * k
+    assert {r["test"] for r in rows} == {"hotelling_t2", "normal_t", "strain_t"}
     assert len(outcome.scores) == len(outcome.comparisons) == 4  # none + three transports
     ladder = next(s for s in outcome.scores if s.method == "pole_ladder_residual")
     assert ladder.power >= 0.8

@@ -1,7 +1,7 @@
 """The current data term: oriented surfaces compared without point correspondence.
 
 A mesh with triangle centres ``c_i`` and area-weighted normals ``n_i`` is the
-current ``sum_i n_i delta_{c_i}``; two meshes have the product
+current ``sum_i n_i delta_{c_i}``; two meshes have the product::
 
     <A, B> = sum_ij exp(-|c_i - d_j|^2 / sigma_W^2) n_i . m_j
 

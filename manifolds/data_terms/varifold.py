@@ -2,7 +2,7 @@
 
 A mesh with triangle centres ``c_i``, areas ``a_i`` and unit normals ``u_i`` is
 the varifold ``sum_i a_i delta_{(c_i, +-u_i)}``; two meshes have the product
-(Charon and Trouve 2013; Deformetrica's attachment ``"Varifold"``)
+(Charon and Trouve 2013; Deformetrica's attachment ``"Varifold"``)::
 
     <A, B> = sum_ij exp(-|c_i - d_j|^2 / sigma_W^2) a_i b_j (u_i . v_j)^2,
 

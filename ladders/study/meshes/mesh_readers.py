@@ -7,23 +7,25 @@ reader from the extension and, where one extension holds several kinds of file,
 from the file's header; a header that does not belong to the extension's format
 is refused with a message saying what the file starts with.
 
-========  ==================================================================  ==============
-ext       read with (chosen by the header)                                    written with
-========  ==================================================================  ==============
-``.vtk``  ``DATASET POLYDATA``: :func:`ladders.study.meshes.vtk_io.read_vtk`   own writer
-          (meshio 5 does not read polydata); any other dataset (e.g. the      (polydata)
-          ``UNSTRUCTURED_GRID`` meshio writes): meshio
-``.vtu``  meshio (``<VTKFile``)                                                meshio
-``.vtp``  :func:`ladders.study.meshes.vtk_xml.read_vtp` (``<VTKFile``;         --
-          meshio does not read VTK XML PolyData)
-``.ply``  meshio (``ply``)                                                     meshio, binary
-``.off``  meshio when the header is ``OFF``; trimesh for its variants          trimesh
-          (``COFF``, ``NOFF``, ...), which meshio does not read
-``.obj``  trimesh (``process=False, maintain_order=True``): meshio 5 fails     trimesh
-          on OBJ files with texture coordinates or normals
-``.stl``  trimesh, then the float32 triangle soup is indexed                  trimesh
-          (see :func:`merge_soup`)
-========  ==================================================================  ==============
+The readers and writers, by extension::
+
+    ========  ==================================================================  ==============
+    ext       read with (chosen by the header)                                    written with
+    ========  ==================================================================  ==============
+    ``.vtk``  ``DATASET POLYDATA``: :func:`ladders.study.meshes.vtk_io.read_vtk`   own writer
+              (meshio 5 does not read polydata); any other dataset (e.g. the      (polydata)
+              ``UNSTRUCTURED_GRID`` meshio writes): meshio
+    ``.vtu``  meshio (``<VTKFile``)                                                meshio
+    ``.vtp``  :func:`ladders.study.meshes.vtk_xml.read_vtp` (``<VTKFile``;         --
+              meshio does not read VTK XML PolyData)
+    ``.ply``  meshio (``ply``)                                                     meshio, binary
+    ``.off``  meshio when the header is ``OFF``; trimesh for its variants          trimesh
+              (``COFF``, ``NOFF``, ...), which meshio does not read
+    ``.obj``  trimesh (``process=False, maintain_order=True``): meshio 5 fails     trimesh
+              on OBJ files with texture coordinates or normals
+    ``.stl``  trimesh, then the float32 triangle soup is indexed                  trimesh
+              (see :func:`merge_soup`)
+    ========  ==================================================================  ==============
 
 meshio cells other than triangles are refused, except points (``vertex``) and
 lines, which are ignored as in legacy VTK files.

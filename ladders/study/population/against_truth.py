@@ -102,6 +102,8 @@ class TransportScore:
     n_affected: int
     strain_power: float
     strain_dice: float
+    normal_power: float
+    normal_dice: float
     auc: float
     auc_low: float
     auc_high: float
@@ -115,11 +117,13 @@ def _score(comparison: GroupComparison, affected, alpha, null: NullRate | None) 
     m = comparison.motion
     detected = comparison.detected(alpha, "displacement")
     strain = comparison.detected(alpha, "strain")
+    normal = comparison.detected(alpha, "normal")
     c = comparison.classifier
     return TransportScore(
         m.name, m.method, m.label, m.deformation, m.alpha2,
         detection_power(detected, affected), dice(detected, affected), int(detected.sum()),
         int(affected.sum()), detection_power(strain, affected), dice(strain, affected),
+        detection_power(normal, affected), dice(normal, affected),
         c.auc, c.ci_low, c.ci_high, comparison.global_test.p_permutation,
         None if null is None else null.rate,
         None if null is None else null.low,
@@ -212,9 +216,9 @@ def _fmt(value, digits: int = 2) -> str:
 def scores_markdown(scores: list[TransportScore]) -> str:
     """A Markdown table of the scores (power, Dice, AUC [CI], null FWER [CI])."""
     lines = [
-        "| transport | alpha^2 | power | Dice | strain power | AUC [95 % CI] | global p | "
-        "FWER under the null [95 % CI] |",
-        "|---|---|---|---|---|---|---|---|",
+        "| transport | alpha^2 | power | Dice | normal-motion power | strain power | "
+        "AUC [95 % CI] | global p | FWER under the null [95 % CI] |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for s in scores:
         alpha2 = "-" if s.alpha2 is None else f"{s.alpha2:g}"
@@ -224,7 +228,7 @@ def scores_markdown(scores: list[TransportScore]) -> str:
             name = f"{s.deformation.upper()} {s.label}"
         lines.append(
             f"| {name} | {alpha2} | "
-            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.strain_power)} | "
+            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.normal_power)} | {_fmt(s.strain_power)} | "
             f"{s.auc:.2f} [{s.auc_low:.2f}, {s.auc_high:.2f}] | {s.global_p:.2g} | {fwer} |"
         )
     return "\n".join(lines) + "\n"

@@ -39,7 +39,7 @@ __all__ = [
     "write_analysis",
 ]
 
-_TESTS = {"displacement": "hotelling_t2", "strain": "t"}
+_TESTS = {"displacement": "hotelling_t2", "normal": "normal_t", "strain": "strain_t"}
 
 
 def _file_name(comparison: GroupComparison) -> str:
@@ -82,6 +82,7 @@ def _test_rows(comparisons, alpha):
             "n_" + c.groups[0]: int(c.labels.sum()),
             "n_" + c.groups[1]: int((~c.labels).sum()),
             "displacement_vertices_significant": int(c.detected(alpha).sum()),
+            "normal_vertices_significant": int(c.detected(alpha, "normal").sum()),
             "strain_vertices_significant": int(c.detected(alpha, "strain").sum()),
             "global_t2": g.statistic,
             "global_p_permutation": g.p_permutation,
@@ -122,21 +123,23 @@ def summary_markdown(
         header,
         f"Groups: {c0.groups[0]} ({int(c0.labels.sum())}) against {c0.groups[1]} "
         f"({int((~c0.labels).sum())}). Per atlas vertex: Hotelling T² of the displacement "
-        f"T' − T and t of the local area strain, family-wise error controlled at {alpha:g} by "
+        f"T' − T, t of its component along the atlas's normal and t of the local area strain, "
+        f"family-wise error controlled at {alpha:g} by "
         f"{n:,} permutations of the group labels (maximum over the vertices). Global test: "
         f"Hotelling T² of the first PCA scores of the displacements, by permutation. "
         "Classifier: PCA and logistic regression, stratified cross-validation, AUC with a "
         "bootstrap interval over the subjects.",
         "",
-        "| motion | vertices found (displacement) | vertices found (strain) | global p | "
+        "| motion | vertices found (displacement) | (normal motion) | (strain) | global p | "
         "AUC [95 % CI] |",
-        "|---|---|---|---|---|",
+        "|---|---|---|---|---|---|",
     ]
     k = c0.displacement.statistic.size
     for row, c in zip(_test_rows(comparisons, alpha), comparisons):
         lines.append(
             f"| {c.motion.label}{'' if c.motion.alpha2 is None else f', α² = {c.motion.alpha2:g}'}"
             f" ({c.motion.deformation}) | {row['displacement_vertices_significant']} / {k} | "
+            f"{row['normal_vertices_significant']} / {k} | "
             f"{row['strain_vertices_significant']} / {k} | {row['global_p_permutation']:.2g} | "
             f"{row['auc']:.2f} [{row['auc_ci_low']:.2f}, {row['auc_ci_high']:.2f}] |"
         )
@@ -165,6 +168,9 @@ def write_maps(comparisons: list[GroupComparison], folder: Path, weight=None, al
             "hotelling_p_fwer": c.displacement.p_fwer,
             "hotelling_p_uncorrected": c.displacement.p_uncorrected,
             "hotelling_significant": (c.displacement.p_fwer < alpha).astype(float),
+            "normal_t": c.normal.statistic,
+            "normal_p_fwer": c.normal.p_fwer,
+            "normal_significant": (c.normal.p_fwer < alpha).astype(float),
             "strain_t": c.strain.statistic,
             "strain_p_fwer": c.strain.p_fwer,
             "strain_significant": (c.strain.p_fwer < alpha).astype(float),
@@ -215,6 +221,7 @@ def plot_pvalue_map(c: GroupComparison, path: Path, weight=None, alpha: float = 
     m = c.motion
     panels = [
         ("displacement (Hotelling T²)", -np.log10(c.displacement.p_fwer)),
+        ("normal motion (t)", -np.log10(c.normal.p_fwer)),
         ("area strain (t)", -np.log10(c.strain.p_fwer)),
     ]
     if weight is not None:

@@ -4,8 +4,11 @@
 (the subjects' motion on the atlas by one transport at one ``alpha^2``) and the
 subjects' groups, and runs:
 
-* per vertex, a Hotelling ``T^2`` test of the displacement vectors and a ``t``
-  test of the local area strain, each with its family-wise error controlled by
+* per vertex, a Hotelling ``T^2`` test of the displacement vectors, a ``t`` test of
+  their component along the atlas's outward normal (the motion a surface shows: a
+  correspondence of segmentations lets vertices slide along the surface, which adds
+  noise to the tangential components only) and a ``t`` test of the local area
+  strain, each with its family-wise error controlled by
   permuting the group labels (maximum statistic over the vertices,
   :func:`ladders.statistics.vertexwise_test`);
 * a tangent PCA of the displacements at the atlas (the flat metric of the point
@@ -27,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import trimesh
 
 from ladders.statistics import (
     ClassifierResult,
@@ -70,6 +74,8 @@ class GroupComparison:
         Hotelling ``T^2`` of the displacement vectors at every atlas vertex.
     strain : VertexwiseTest
         ``t`` of the local area strain at every vertex (positive: larger in the first group).
+    normal : VertexwiseTest
+        ``t`` of the displacement's component along the atlas's outward vertex normal.
     pca : TangentPCA
         Tangent PCA of the displacements at the atlas (flat metric).
     global_test : GlobalTest
@@ -86,6 +92,7 @@ class GroupComparison:
     groups: tuple
     displacement: VertexwiseTest
     strain: VertexwiseTest
+    normal: VertexwiseTest
     pca: TangentPCA
     global_test: GlobalTest
     classifier: ClassifierResult
@@ -99,7 +106,8 @@ class GroupComparison:
         return data[mask].mean(axis=0)
 
     def detected(self, alpha: float = 0.05, test: str = "displacement") -> np.ndarray:
-        """Vertices whose family-wise corrected p-value is below ``alpha``."""
+        """Vertices whose family-wise corrected p-value is below ``alpha`` in ``test``
+        (``"displacement"``, ``"normal"`` or ``"strain"``)."""
         return getattr(self, test).p_fwer < alpha
 
 
@@ -163,6 +171,12 @@ def normalize_motion(
     return out, scales
 
 
+def _outward_normals(atlas, faces) -> np.ndarray:
+    """Unit vertex normals of the atlas, oriented outward (the enclosed volume positive)."""
+    normals = np.asarray(trimesh.Trimesh(atlas, faces, process=False).vertex_normals, dtype=float)
+    return normals if enclosed_volume(atlas, faces) >= 0 else -normals
+
+
 def _strain(atlas, faces, displacement) -> np.ndarray:
     return np.stack([area_strain(atlas, atlas + d, faces) for d in displacement])
 
@@ -222,6 +236,10 @@ def compare_groups(
         motion.displacement, labels, n_permutations, rng=rng, progress=progress
     )
     strain = vertexwise_test(motion.strain, labels, n_permutations, rng=rng, progress=progress)
+    along = np.einsum(
+        "nkd,kd->nk", motion.displacement, _outward_normals(motion.atlas, motion.faces)
+    )
+    normal = vertexwise_test(along, labels, n_permutations, rng=rng, progress=progress)
     space = Euclidean(motion.atlas.shape)
     pca = tangent_pca(space, motion.atlas, motion.displacement, n_components, metric="flat")
     k = min(n_components, pca.scores.shape[1])
@@ -230,6 +248,6 @@ def compare_groups(
         motion.displacement.reshape(n, -1), labels, n_splits=n_splits, n_components=k, rng=rng
     )
     return GroupComparison(
-        motion, labels, tuple(groups), displacement, strain, pca, global_, classifier,
+        motion, labels, tuple(groups), displacement, strain, normal, pca, global_, classifier,
         normalize, scales,
     )  # fmt: skip

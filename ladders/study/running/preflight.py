@@ -7,7 +7,7 @@ They belong to the study, not to its command line: :func:`ladders.study.run` and
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
+from scipy import spatial
 
 from manifolds.errors import ManifoldError
 from manifolds.lddmm.control_points import check_grid_budget, grid_spacing
@@ -39,7 +39,7 @@ def check_sigma(points, settings) -> None:
     """
     points = np.asarray(points, dtype=float)
     extent = float(np.ptp(points, axis=0).max())
-    spacing_nn = float(np.median(cKDTree(points).query(points, k=2)[0][:, 1]))
+    spacing_nn = float(np.median(spatial.cKDTree(points).query(points, k=2)[0][:, 1]))
     sigma = settings.sigma
     if sigma < 0.1 * spacing_nn or sigma > 100.0 * extent:
         side = "below a tenth of" if sigma < 0.1 * spacing_nn else "above 100 times"
