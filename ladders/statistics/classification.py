@@ -4,8 +4,10 @@
 a logistic regression inside each fold of a stratified ``n_splits``-fold
 cross-validation (the PCA sees only the training subjects), collects the
 out-of-fold decision scores of every subject and measures their area under the ROC
-curve. Its confidence interval is a bootstrap over the subjects
-(:func:`scipy.stats.bootstrap`, percentile, resampling (label, score) pairs).
+curve. Its confidence interval is a bootstrap over the subjects stratified by group
+(:func:`scipy.stats.bootstrap` of the Mann-Whitney form of the AUC, each group's
+out-of-fold scores resampled within the group, so that every resample has both
+groups; percentile interval).
 The features are not standardised feature by feature: they are coordinates of one
 geometric quantity (displacements in mm), whose small, noisy components a
 per-feature scaling would inflate; the PCA keeps the directions of largest variance.
@@ -13,6 +15,7 @@ per-feature scaling would inflate; the PCA keeps the directions of largest varia
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,12 +60,11 @@ class ClassifierResult:
     model: str
 
 
-def _auc(labels, scores, axis=-1):
-    labels = np.asarray(labels)
-    scores = np.asarray(scores)
-    if labels.ndim == 1:
-        return roc_auc_score(labels, scores) if 0 < labels.sum() < labels.size else np.nan
-    return np.array([_auc(lab, sco) for lab, sco in zip(labels, scores)])
+def _auc_two_sample(first, second, axis=-1):
+    """Mann-Whitney AUC ``P(x > y) + P(x = y) / 2`` of scores of the first group over the second."""
+    x = np.moveaxis(np.asarray(first), axis, -1)[..., :, None]
+    y = np.moveaxis(np.asarray(second), axis, -1)[..., None, :]
+    return (x > y).mean(axis=(-2, -1)) + 0.5 * (x == y).mean(axis=(-2, -1))
 
 
 def cross_validated_auc(
@@ -121,11 +123,16 @@ def cross_validated_auc(
         model.fit(x[train], labels[train])
         scores[test] = model.decision_function(x[test])
     auc = float(roc_auc_score(labels, scores))
-    boot = stats.bootstrap(
-        (labels.astype(float), scores), _auc, paired=True, vectorized=True,
-        n_resamples=int(n_bootstrap), confidence_level=confidence, method="percentile", rng=rng,
-    )  # fmt: skip
+    with warnings.catch_warnings():  # a perfect separation makes every resample's AUC 1
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        boot = stats.bootstrap(
+            (scores[labels], scores[~labels]), _auc_two_sample, vectorized=True,
+            n_resamples=int(n_bootstrap), confidence_level=confidence, method="percentile",
+            rng=rng,
+        )  # fmt: skip
     low, high = boot.confidence_interval
+    if not (np.isfinite(low) and np.isfinite(high)):  # every resample equal: the AUC itself
+        low = high = auc
     return ClassifierResult(
         auc, float(low), float(high), float(confidence), scores, n_splits, k,
         f"PCA({k}) + logistic regression, stratified {n_splits}-fold cross-validation",

@@ -216,7 +216,7 @@ def compare_groups(
     progress : bool
         Progress bars over the permutations.
     n_splits : int, default 5
-        Folds of the stratified cross-validation.
+        Folds of the stratified cross-validation (at most the smaller group's size).
 
     Returns
     -------
@@ -244,9 +244,11 @@ def compare_groups(
     pca = tangent_pca(space, motion.atlas, motion.displacement, n_components, metric="flat")
     k = min(n_components, pca.scores.shape[1])
     global_ = global_test(pca.scores[:, :k], labels, n_permutations, rng=rng)
-    classifier = cross_validated_auc(
-        motion.displacement.reshape(n, -1), labels, n_splits=n_splits, n_components=k, rng=rng
-    )
+    smallest = int(min(labels.sum(), (~labels).sum()))
+    classifier = cross_validated_auc(  # fewer folds for small groups (each fold needs both)
+        motion.displacement.reshape(n, -1), labels, n_splits=max(2, min(n_splits, smallest)),
+        n_components=k, rng=rng,
+    )  # fmt: skip
     return GroupComparison(
         motion, labels, tuple(groups), displacement, strain, normal, pca, global_, classifier,
         normalize, scales,
