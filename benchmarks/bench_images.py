@@ -16,7 +16,8 @@ Measured against the true (open) surface: the mean and 95th percentile of the
 distances of each surface's vertices to the other surface (both directions pooled),
 in mm, and the error of the enclosed volume (the extracted surface before the cut
 against the true surface closed at its base). For the thick slices, several
-smoothing settings are compared (mask smoothing in voxels, Taubin iterations).
+smoothing settings are compared (mask smoothing in voxels, Taubin iterations), and
+the cut at the base plane itself instead of half a slice below it (``cut_margin``).
 Targets at 1 mm: mean distance at most 0.3 mm, volume within 2 %.
 """
 
@@ -60,6 +61,7 @@ THICK_SETTINGS = {
     "mask 1 voxel, Taubin 20": MeshingSettings(mask_sigma=1.0),
     "mask 0.5 voxel, Taubin 100": MeshingSettings(taubin_iterations=100),
     "mask 1 voxel, Taubin 100": MeshingSettings(mask_sigma=1.0, taubin_iterations=100),
+    "default, cut at the base plane itself (cut_margin 0)": MeshingSettings(cut_margin=0.0),
 }
 
 

@@ -3,6 +3,7 @@
 import csv
 import hashlib
 import json
+from dataclasses import replace
 
 import nibabel as nib
 import numpy as np
@@ -98,6 +99,41 @@ def _write(path, data, affine=None, codes=(1, 1)):
         img.set_qform(np.eye(4), code=codes[1])
     nib.save(img, str(path))
     return path
+
+
+def test_the_cut_removes_the_lid_a_label_makes_at_its_base():
+    """A half ball cut at z = 0 in 8 mm slices: its label ends with a lid below the base."""
+    from ladders.study.imaging import close_surface, cut_at_plane
+
+    base = (0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    open_v, open_f = cut_at_plane(SPHERE.vertices, SPHERE.faces, base)
+    closed_v, closed_f = close_surface(open_v, open_f)
+    # slice centres at z = -6 (inside) and +2 (outside): the lid falls near z = -2
+    affine = short_axis_affine([-16.5, -16.5, -22.0], 1.5, 8.0)
+    settings = MeshingSettings(n_vertices=None, cut_plane=base)
+    at_plane = _mesh_of(closed_v, closed_f, affine, (23, 23, 4), replace(settings, cut_margin=0))
+    below = _mesh_of(closed_v, closed_f, affine, (23, 23, 4), settings)
+    assert at_plane[2].closed and at_plane[2].faces_cut == 0
+    assert "does not cross" in at_plane[2].describe()
+    v, f, report = below
+    assert not report.closed and report.boundary_loops == 1 and report.faces_cut > 0
+    assert v[:, 2].max() <= -4.0 + 1.0  # half a slice below the base, to within a face
+    lid = surface_distances(at_plane[0], at_plane[1], open_v, open_f)
+    cut = surface_distances(v, f, open_v, open_f)
+    assert cut["mean_surface_distance"] < 0.8 * lid["mean_surface_distance"]
+
+
+def test_the_cut_margin_is_measured_along_the_normal_in_voxel_widths():
+    from ladders.study.imaging.surface_extraction import _shifted_plane
+
+    settings = MeshingSettings(cut_plane=(1.0, 2.0, 3.0, 0.0, 0.0, 2.0), cut_margin=0.5)
+    stack = short_axis_affine([0.0, 0.0, 0.0], 1.5, 8.0)
+    np.testing.assert_allclose(_shifted_plane(settings, stack), (1, 2, -1, 0, 0, 1))
+    tilted = short_axis_affine([0.0, 0.0, 0.0], 1.5, 8.0, tilt_deg=30.0, flip=True)
+    width = 1.5 * np.sin(np.radians(30)) + 8.0 * np.cos(np.radians(30))
+    np.testing.assert_allclose(_shifted_plane(settings, tilted)[2], 3.0 - 0.5 * width)
+    with pytest.raises(ValueError, match="cut_margin"):
+        MeshingSettings(cut_margin=-1.0)
 
 
 def test_bad_images_are_refused_naming_the_file(tmp_path):

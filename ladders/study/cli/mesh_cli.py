@@ -106,6 +106,9 @@ def add_mesh_parser(sub) -> None:
                    help="remove the surface beyond this plane (mm), e.g. the valve plane")  # fmt: skip
     p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
                    help="CSV with the columns image,x,y,z,nx,ny,nz: a cut plane per image file")  # fmt: skip
+    p.add_argument("--cut-margin", type=_nonnegative_float, default=0.5,
+                   help="move the cut plane this many voxel widths against its normal, so that "
+                        "the lid a label makes at the valve plane goes (0: cut at the plane)")  # fmt: skip
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
     p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -124,6 +127,7 @@ def run_mesh_command(args) -> int:
         settings = MeshingSettings(
             mask_sigma=args.mask_sigma, taubin_iterations=args.taubin_iterations,
             n_vertices=args.vertices or None, cut_plane=args.cut_plane,
+            cut_margin=args.cut_margin,
         )  # fmt: skip
         outcome = mesh_label_images(
             args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,

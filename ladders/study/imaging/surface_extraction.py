@@ -49,6 +49,15 @@ class MeshingSettings:
     cut_plane : tuple of 6 floats or None
         ``(x, y, z, nx, ny, nz)`` in world mm: the faces whose centroid is on the side
         the normal points to are removed (an open surface, e.g. at a valve plane).
+    cut_margin : float
+        How far the cut plane is moved against its normal before the cut, in voxel
+        extents along the normal (the voxel's width in that direction, from the
+        affine: 8 mm across 8 mm slices, 1 mm for 1 mm voxels). A label that stops at
+        the valve plane gives a surface closed by a lid within half a voxel of that
+        plane, above or below it; the default 0.5 removes the lid whichever side it
+        falls (with a plane exactly at the base of an 8 mm short-axis stack the lid
+        stays on about half of the meshes: mean surface distance 0.7-1.3 mm instead of
+        0.3-0.4 mm, ``benchmarks/bench_images.py``). 0: cut at the plane as given.
     keep_largest : bool
         Keep the largest connected component of the label only.
     """
@@ -59,6 +68,7 @@ class MeshingSettings:
     taubin_nu: float = 0.53
     n_vertices: int | None = 2000
     cut_plane: tuple | None = None
+    cut_margin: float = 0.5
     keep_largest: bool = True
 
     def __post_init__(self):
@@ -77,6 +87,10 @@ class MeshingSettings:
                     f"cut_plane: expected (x, y, z, nx, ny, nz) with a non-zero normal, got {self.cut_plane}"
                 )
             object.__setattr__(self, "cut_plane", plane)
+        if not np.isfinite(self.cut_margin) or self.cut_margin < 0:
+            raise ValueError(
+                f"cut_margin: expected a number of voxel extents >= 0, got {self.cut_margin}"
+            )
 
     def as_dict(self) -> dict:
         """JSON-ready fields."""
@@ -101,6 +115,8 @@ class SurfaceReport:
     volume_after_smoothing: float
     n_vertices: int
     n_faces: int
+    faces_cut: int = 0
+    cut_requested: bool = False
 
     @property
     def shrinkage(self) -> float:
@@ -124,6 +140,11 @@ class SurfaceReport:
         extra = (
             f", {self.non_manifold_edges} non-manifold edge(s)" if self.non_manifold_edges else ""
         )
+        if self.closed and self.faces_cut == 0 and self.cut_requested:
+            extra += ", the cut plane does not cross the surface"
+        elif self.faces_cut:
+            extra += f", {self.faces_cut} faces cut off"
+
         return (
             f"label {self.label}: {self.voxels} voxels, {dropped}; {surface}{extra}; "
             f"{self.n_vertices} vertices; smoothing changed the volume by {100 * self.shrinkage:+.2f} %"
@@ -227,12 +248,24 @@ def extract_surface(
         reduction = 1.0 - settings.n_vertices / len(world)
         world, faces = fast_simplification.simplify(world, faces, target_reduction=reduction)
         world, faces = np.asarray(world, float), np.asarray(faces, np.int64)
+    n_before_cut = len(faces)
     if settings.cut_plane is not None:
-        world, faces = cut_at_plane(world, faces, settings.cut_plane)
+        world, faces = cut_at_plane(world, faces, _shifted_plane(settings, image.affine))
     boundary, non_manifold = _edge_counts(faces)
     report = SurfaceReport(
         label, voxels, int(n_components), dropped_components, dropped_voxels, boundary == 0,
         _boundary_loops(faces) if boundary else 0, non_manifold, float(before),
-        float(after), len(world), len(faces),
+        float(after), len(world), len(faces), n_before_cut - len(faces),
+        settings.cut_plane is not None,
     )  # fmt: skip
     return world, faces, report
+
+
+def _shifted_plane(settings: MeshingSettings, affine: np.ndarray) -> tuple:
+    """The cut plane moved ``cut_margin`` voxel extents against its normal."""
+    point = np.asarray(settings.cut_plane[:3], float)
+    normal = np.asarray(settings.cut_plane[3:], float)
+    normal = normal / np.linalg.norm(normal)
+    extent = float(np.abs(normal @ np.asarray(affine, float)[:3, :3]).sum())
+    point = point - settings.cut_margin * extent * normal
+    return (*point, *normal)
