@@ -32,6 +32,7 @@ from .control_points import (
     resolve_control_points,
     vertex_control_points,
 )
+from .flow_models import FlowModel, HamiltonianFlow, StationaryKernelFlow
 from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_jvp, shooting_vjp
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
@@ -79,6 +80,9 @@ __all__ = [
     "RegistrationCache",
     "register",
     "registration_objective",
+    "FlowModel",
+    "HamiltonianFlow",
+    "StationaryKernelFlow",
     "ShootingResult",
     "hamiltonian",
     "shoot",

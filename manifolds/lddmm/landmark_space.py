@@ -7,9 +7,11 @@ points); ``Log_T(S)`` is a registration of ``T`` onto ``S`` (eq. 3), inexact
 for ``alpha > 0``: ``S = Exp_T(Log_T S) + delta`` (eq. 4). The metric is the
 RKHS product of the kernel fields (eq. 1).
 
-A subclass provides the deformation model: ``exp`` (the deformation of the
-momenta applied to the shape), ``flow`` (the same deformation applied to any
-points) and ``_register`` (the optimisation of eq. 3 for that model).
+A subclass provides the deformation model: ``flow_model`` (the
+:class:`~manifolds.lddmm.flow_models.FlowModel` the registration of eq. 3 optimises
+through, which also sets the default integrator and whether control points can be
+optimised), ``exp`` (the deformation of the momenta applied to the shape) and
+``flow`` (the same deformation applied to any points).
 """
 
 from __future__ import annotations
@@ -25,7 +27,9 @@ from ..errors import ManifoldError
 from ..numerics.integrators import get_integrator
 from ..validation import check_array, check_float, check_int, check_n_samples, check_rng
 from .control_points import check_vertex_indices
+from .flow_models import FlowModel
 from .inverse_consistency import inverse_consistency
+from .registration import register as register_with_flow
 from .registration_cache import RegistrationCache, registration_key
 from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
@@ -54,7 +58,7 @@ class KernelLandmarkSpace(Connection):
         solver, stopping rule). Keyword arguments named after its fields
         (``control_points="grid"``, ``n_steps=20``, ``stopping="shape"``, ...)
         override it; without ``settings`` they build one with ``sigma``. An
-        integrator left to None is the class's ``default_integrator``.
+        integrator left to None is the flow model's ``default_integrator``.
     cache_size : int, default 16
         Number of registrations kept (LRU) so that ``log``, ``log_with_residual``
         and ``register`` on the same pair register only once.
@@ -79,10 +83,8 @@ class KernelLandmarkSpace(Connection):
 
     is_symmetric = False
     supports_batch = False
-    #: Whether the deformation model can optimise its control points in ``log``.
-    can_optimize_control_points = False
-    #: Integrator used when the settings leave it to None.
-    default_integrator = "euler"
+    #: The deformation model of the registrations (set by each subclass).
+    flow_model: type[FlowModel]
 
     def __init__(
         self,
@@ -98,7 +100,7 @@ class KernelLandmarkSpace(Connection):
     ):
         name = type(self).__name__
         settings = self._make_settings(sigma, settings, overrides)
-        if settings.optimize_control_points and not self.can_optimize_control_points:
+        if settings.optimize_control_points and not self.flow_model.moves_control_points:
             raise ManifoldError(
                 f"{name}: optimize_control_points: this space keeps its control points fixed "
                 "(only LDDMMLandmarks optimises them)"
@@ -145,7 +147,7 @@ class KernelLandmarkSpace(Connection):
         except ManifoldError as exc:
             raise ManifoldError(f"{name}: {exc}") from None
         if settings.integrator is None:
-            settings = settings.replace(integrator=self.default_integrator)
+            settings = settings.replace(integrator=self.flow_model.default_integrator)
         return settings
 
     # ------------------------------------------------------------ settings views
@@ -185,10 +187,6 @@ class KernelLandmarkSpace(Connection):
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
         """The deformation of ``momenta`` at ``control_points`` (default ``c(template)``)
         applied to ``points`` ``(n, d)``."""
-
-    @abstractmethod
-    def _register(self, template, target, control_points, initial_momenta) -> RegistrationResult:
-        """Minimise eq. (3) from ``control_points`` (and ``initial_momenta`` if given)."""
 
     def _flow_inputs(self, template, momenta, points, control_points):
         """Checked ``(control points, momenta, points)`` of :meth:`flow`."""
@@ -294,7 +292,10 @@ class KernelLandmarkSpace(Connection):
         cached = self._cache.get(key)
         if cached is not None:
             return cached
-        result = self._register(template, target, cp, initial_momenta)
+        result = register_with_flow(
+            template, target, self.alpha, self.settings, flow=self.flow_model,
+            control_points=cp, initial_momenta=initial_momenta, kernel=self.kernel,
+        )  # fmt: skip
         self.n_registrations += 1
         self.n_unconverged += not result.converged
         self.n_iterations += result.n_iter

@@ -42,9 +42,7 @@ __all__ = [
     "RegistrationResult",
     "as_data_term",
     "registration_objective",
-    "model_objective",
     "register",
-    "run_registration",
     "build_registration_problem",
 ]
 
@@ -63,26 +61,38 @@ def registration_objective(
     control_points: np.ndarray,
     momenta: np.ndarray,
     alpha: float,
-    integrator: str | Integrator = "euler",
+    integrator: str | Integrator | None = None,
     n_steps: int = 10,
     with_gradient: bool = True,
     control_points_gradient: bool = False,
+    *,
+    flow: type[FlowModel] = HamiltonianFlow,
 ):
-    """Objective ``C(c, mu)`` of eq. (3) and its exact gradient (LDDMM shooting).
-
-    When the control points are the template's vertices (and
-    ``control_points_gradient`` is False) the template is carried as the
-    control points themselves (no separate point flow).
+    """Objective ``C(c, mu)`` of eq. (3) for the deformation model ``flow``, with its exact gradient.
 
     With ``control_points_gradient`` the gradient with respect to the initial
-    control points is returned as well: the adjoint state of ``c`` at ``t = 0``
-    (back-propagated data term) plus the regulariser's
-    ``d(alpha^2 <mu, K(c, c) mu>)/dc_i = -2 alpha^2 dmu_i/dt(0)``.
+    control points is returned as well (LDDMM only: its control points move with
+    the flow): the adjoint state of ``c`` at ``t = 0`` (back-propagated data
+    term) plus the regulariser's
+    ``d(alpha^2 <mu, K(c, c) mu>)/dc_i = -2 alpha^2 dmu_i/dt(0)``. When the control
+    points are the template's vertices (and ``control_points_gradient`` is False)
+    the template is carried as the control points themselves.
 
     Parameters
     ----------
+    kernel : GaussianKernel
+    template : array, shape ``(k, d)``
     target : array ``(k, d)`` or DataTerm
         The target shape in correspondence, or any data term of the deformed points.
+    control_points, momenta : arrays, shape ``(n_cp, d)``
+    alpha : float
+    integrator : str or Integrator, optional
+        Default: the flow model's ``default_integrator`` (Euler for LDDMM, RK4 for SVF).
+    n_steps : int
+    with_gradient, control_points_gradient : bool
+    flow : FlowModel subclass, default HamiltonianFlow
+        :class:`HamiltonianFlow` (LDDMM geodesic shooting, eq. 2) or
+        :class:`StationaryKernelFlow` (the flow of a stationary field: the SVF).
 
     Returns
     -------
@@ -90,33 +100,17 @@ def registration_objective(
     gradient : array, shape ``(n_cp, d)``, or the pair ``(g_c, g_mu)`` with
         ``control_points_gradient`` (None unless ``with_gradient``)
     deformed : array, shape ``(k, d)``, ``phi_1(T)``
-    rkhs_sq : float, ``||v_0||_H^2``
+    norm_sq : float, ``||v||_H^2``
     """
-    return model_objective(
-        HamiltonianFlow(kernel, integrator, n_steps),
-        template, target, control_points, momenta, alpha, with_gradient,
-        control_points_gradient,
-    )  # fmt: skip
-
-
-def model_objective(
-    model: FlowModel,
-    template,
-    target,
-    control_points,
-    momenta,
-    alpha: float,
-    with_gradient: bool = True,
-    control_points_gradient: bool = False,
-):
-    """Objective of eq. (3) for the deformation ``model`` and its exact gradient.
-
-    Returns ``(value, gradient, deformed, norm_sq)`` as :func:`registration_objective`.
-    """
+    if control_points_gradient and not flow.moves_control_points:
+        raise ValueError(
+            f"control_points_gradient: the {flow.label} registration keeps its control points"
+        )
+    model = flow(kernel, flow.default_integrator if integrator is None else integrator, n_steps)
     template = np.asarray(template, dtype=float)
     cp = np.asarray(control_points, dtype=float)
     settings = RegistrationSettings(
-        sigma=model.kernel.sigma, optimize_control_points=bool(control_points_gradient)
+        sigma=kernel.sigma, optimize_control_points=bool(control_points_gradient)
     )
     problem = RegistrationProblem(
         model, template, as_data_term(target), alpha, settings, IdentityPreconditioner(),
@@ -125,14 +119,13 @@ def model_objective(
     problem.control_points = cp
     x = problem.variables(np.asarray(momenta, dtype=float), cp)
     ev = problem.evaluate(x, with_gradient=with_gradient)
-    flow = ev.flow_pass
     if not with_gradient:
         grad = None
     elif control_points_gradient:
         grad = (ev.grad_c, ev.grad_mu)
     else:
         grad = ev.grad_mu
-    return ev.value, grad, flow.deformed, flow.norm_sq
+    return ev.value, grad, ev.flow_pass.deformed, ev.flow_pass.norm_sq
 
 
 def register(
@@ -141,12 +134,13 @@ def register(
     alpha: float,
     settings: RegistrationSettings,
     *,
+    flow: type[FlowModel] = HamiltonianFlow,
     control_points: np.ndarray | None = None,
     initial_momenta=None,
     kernel: GaussianKernel | None = None,
     warn: bool = True,
 ) -> RegistrationResult:
-    """Register ``template`` onto ``target`` by minimising eq. (3).
+    """Register ``template`` onto ``target`` by minimising eq. (3): the one registration driver.
 
     Parameters
     ----------
@@ -155,10 +149,14 @@ def register(
         The target shape in correspondence with the template, or a data term
         (e.g. a varifold distance to a mesh with another triangulation).
     alpha : float
-        Regularisation weight (``alpha^2`` multiplies ``||v_0||_H^2``).
+        Regularisation weight (``alpha^2`` multiplies ``||v||_H^2``).
     settings : RegistrationSettings
-        Kernel, control points, integrator, solver and stopping rule. Its
-        integrator defaults to Euler here.
+        Kernel, control points, integrator, solver and stopping rule. An integrator
+        left to None is the flow model's ``default_integrator``.
+    flow : FlowModel subclass, default HamiltonianFlow
+        The deformation model: :class:`HamiltonianFlow` (LDDMM) or
+        :class:`StationaryKernelFlow` (SVF: ``momenta`` are then the stationary
+        field's and ``rkhs_norm`` is ``||v||_V``; control points cannot be optimised).
     control_points : array, shape ``(n_cp, d)``, optional
         Overrides the settings' policy (with ``optimize_control_points``, the start).
     initial_momenta : array, shape ``(n_cp, d)``, optional
@@ -168,18 +166,26 @@ def register(
         A kernel of width ``settings.sigma`` to reuse (e.g. with its block size).
     warn : bool
         Emit a :class:`ConvergenceWarning` when the stopping rule was not met.
+
+    The problem is built by :func:`build_registration_problem` and solved by the
+    settings' solver (:mod:`manifolds.numerics.solvers`).
     """
-    return run_registration(
-        HamiltonianFlow,
-        template,
-        target,
-        alpha,
-        settings,
-        control_points=control_points,
-        initial_momenta=initial_momenta,
-        kernel=kernel,
-        warn=warn,
-    )
+    problem, x0 = build_registration_problem(
+        flow, template, target, alpha, settings, control_points=control_points,
+        initial_momenta=initial_momenta, kernel=kernel,
+    )  # fmt: skip
+    opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
+    result = problem.result(opt)
+    if warn and not result.converged:
+        warnings.warn(
+            ConvergenceWarning(
+                f"{flow.label} registration did not converge after {opt.n_iter} "
+                f"iterations ({opt.message}); objective {result.objective:.6g}, "
+                f"registration error {result.registration_error:.3g}"
+            ),
+            stacklevel=2,
+        )
+    return result
 
 
 def _check_settings(settings, kernel, label):
@@ -199,7 +205,7 @@ def _check_settings(settings, kernel, label):
 
 
 def build_registration_problem(
-    model_class: type[FlowModel],
+    flow: type[FlowModel],
     template,
     target,
     alpha: float,
@@ -209,7 +215,7 @@ def build_registration_problem(
     initial_momenta=None,
     kernel: GaussianKernel | None = None,
 ) -> tuple[RegistrationProblem, np.ndarray]:
-    """The problem of eq. (3) that :func:`run_registration` hands to the solver, and its start.
+    """The problem of eq. (3) that :func:`register` hands to the solver, and its start.
 
     For a solver or an analysis of one's own: ``problem.value_and_gradient(x)``,
     ``problem.gauss_newton_product(x, v)``, ``problem.shape(x)`` and
@@ -222,7 +228,12 @@ def build_registration_problem(
         The start in the solver's variables (the linearised start unless
         ``initial_momenta`` is given).
     """
-    label = model_class.label
+    label = flow.label
+    if settings.optimize_control_points and not flow.moves_control_points:
+        raise ValueError(
+            f"{label} registration: settings.optimize_control_points: the {label} "
+            "registration keeps its control points fixed"
+        )
     kernel = _check_settings(settings, kernel, label)
     template = np.asarray(template, dtype=float)
     data_term = as_data_term(target)
@@ -238,50 +249,7 @@ def build_registration_problem(
         mu0 = np.asarray(initial_momenta, dtype=float).reshape(cp.shape)
     else:
         mu0 = pre.linearised_start(kernel, template, data_term.linear_target(template), cp)
-    model = model_class(kernel, settings.integrator or model_class.default_integrator,
+    model = flow(kernel, settings.integrator or flow.default_integrator,
                         settings.n_steps)  # fmt: skip
     problem = RegistrationProblem(model, template, data_term, alpha, settings, pre, dense)
     return problem, problem.start(mu0, cp)
-
-
-def run_registration(
-    model_class: type[FlowModel],
-    template,
-    target,
-    alpha: float,
-    settings: RegistrationSettings,
-    *,
-    control_points=None,
-    initial_momenta=None,
-    kernel: GaussianKernel | None = None,
-    warn: bool = True,
-) -> RegistrationResult:
-    """The driver shared by the LDDMM and SVF registrations.
-
-    ``model_class`` is the deformation model (:class:`HamiltonianFlow`,
-    :class:`StationaryKernelFlow`); its ``default_integrator`` is used when the
-    settings leave the integrator to None. The other parameters are those of
-    :func:`register`. The problem is built by :func:`build_registration_problem`.
-    """
-    problem, x0 = build_registration_problem(
-        model_class,
-        template,
-        target,
-        alpha,
-        settings,
-        control_points=control_points,
-        initial_momenta=initial_momenta,
-        kernel=kernel,
-    )
-    opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
-    result = problem.result(opt)
-    if warn and not result.converged:
-        warnings.warn(
-            ConvergenceWarning(
-                f"{model_class.label} registration did not converge after {opt.n_iter} "
-                f"iterations ({opt.message}); objective {result.objective:.6g}, "
-                f"registration error {result.registration_error:.3g}"
-            ),
-            stacklevel=3,
-        )
-    return result

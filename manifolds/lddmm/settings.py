@@ -3,8 +3,8 @@
 :class:`RegistrationSettings` holds everything a registration's result depends on
 besides its inputs (template, target, ``alpha``): kernel width and backend,
 control-point policy and whether they are optimised, integrator and time steps,
-solver, stopping rule, tolerances and iteration limit. :func:`manifolds.lddmm.register`,
-:func:`manifolds.lddmm.register_svf`, the landmark spaces and the study take it.
+solver, stopping rule, tolerances and iteration limit. :func:`manifolds.lddmm.register`
+(with either flow model), the landmark spaces and the study take it.
 
 Its :meth:`~RegistrationSettings.key` is a stable hash of the fields (with the
 kernel backend resolved, since the compiled kernels' results differ from numpy's

@@ -16,10 +16,9 @@ import numpy as np
 from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
 from .control_points import is_dense
+from .flow_models import HamiltonianFlow
 from .hamiltonian_shooting import hamiltonian_system, shoot
 from .landmark_space import KernelLandmarkSpace
-from .registration import register
-from .registration_result import RegistrationResult
 from .tangent import LandmarkTangent
 
 __all__ = ["LDDMMLandmarks"]
@@ -38,7 +37,7 @@ class LDDMMLandmarks(KernelLandmarkSpace):
     to ``"euler"``.
     """
 
-    can_optimize_control_points = True
+    flow_model = HamiltonianFlow
 
     # ------------------------------------------------------------ deformation model
     def shoot(
@@ -124,14 +123,3 @@ class LDDMMLandmarks(KernelLandmarkSpace):
         cp = self.control_points(point)
         tangent = self._check_momenta(cp, tangent, "tangent")
         return self.shoot(point, tangent, control_points=None)
-
-    def _register(self, template, target, control_points, initial_momenta) -> RegistrationResult:
-        return register(
-            template,
-            target,
-            self.alpha,
-            self.settings,
-            control_points=control_points,
-            initial_momenta=initial_momenta,
-            kernel=self.kernel,
-        )

@@ -19,10 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .flow_models import StationaryKernelFlow
 from .landmark_space import KernelLandmarkSpace
-from .registration_result import RegistrationResult
 from .stationary_flow import StationaryFlow, kernel_flow
-from .svf_registration import register_svf
 
 __all__ = ["SVFLandmarks"]
 
@@ -38,7 +37,7 @@ class SVFLandmarks(KernelLandmarkSpace):
     defaults to ``"rk4"``.
     """
 
-    default_integrator = "rk4"
+    flow_model = StationaryKernelFlow
 
     # ------------------------------------------------------------ deformation model
     def deformation(self, point, tangent) -> StationaryFlow:
@@ -61,14 +60,3 @@ class SVFLandmarks(KernelLandmarkSpace):
         if not tangent.any():
             return point.copy()
         return kernel_flow(self.kernel, cp, tangent, point, self.integrator, self.n_steps).points
-
-    def _register(self, template, target, control_points, initial_momenta) -> RegistrationResult:
-        return register_svf(
-            template,
-            target,
-            self.alpha,
-            self.settings,
-            control_points=control_points,
-            initial_momenta=initial_momenta,
-            kernel=self.kernel,
-        )
