@@ -75,7 +75,7 @@ def _solve(template, target, alpha, settings):
                      settings.max_iter)  # fmt: skip
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        opt = get_solver(settings.solver)(problem, x0.copy(), settings, rule)
+        opt = get_solver(settings.solver)(problem, x0.copy(), settings.solver_options(), rule)
     return problem, x0, opt, visited
 
 

@@ -1,5 +1,6 @@
 """RegistrationSettings: validation, stable key, and the spaces' and study's use of it."""
 
+import dataclasses
 import hashlib
 import json
 import subprocess
@@ -8,9 +9,11 @@ import sys
 import numpy as np
 import pytest
 
+import manifolds.lddmm.settings as settings_module
 from ladders.study.running.pipeline import StudyConfig
 from manifolds.errors import ManifoldError
-from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks
+from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, numba_available
+from manifolds.numerics.solvers import SolverOptions, StoppingRule
 
 
 def test_settings_are_frozen_hashable_and_round_trip_through_a_dict():
@@ -22,41 +25,103 @@ def test_settings_are_frozen_hashable_and_round_trip_through_a_dict():
     assert back == s and back.key() == s.key()
 
 
-def test_key_changes_with_every_field_and_with_the_backend():
+#: For every field, settings where it is in effect, and a second value.
+FLIPS = {
+    "sigma": ({}, 2.0),
+    "control_points": ({}, "grid"),
+    "control_point_spacing": ({"control_points": "grid"}, 0.5),
+    "control_point_indices": ({"control_points": "vertices"}, (1, 4, 9)),
+    "optimize_control_points": ({}, True),
+    "control_point_scale": ({"optimize_control_points": True}, 3.0),
+    "integrator": ({}, "rk2"),
+    "n_steps": ({}, 11),
+    "solver": ({}, "gauss-newton"),
+    "stopping": ({}, "shape"),
+    "shape_tol": ({"stopping": "shape"}, 1e-4),
+    "ftol": ({}, 1e-8),
+    "gtol": ({}, 1e-6),
+    "max_iter": ({}, 7),
+    "max_corrections": ({}, 10),
+    "max_line_search": ({}, 5),
+    "max_inner": ({"solver": "gauss-newton"}, 5),
+    "joint_metric": ({"optimize_control_points": True}, False),
+    "refresh_every": ({"optimize_control_points": True}, 3),
+    "precondition": ({}, False),
+    "rel_ridge": ({}, 1e-3),
+    "kernel_backend": ({"kernel_backend": "numpy"}, "numba"),
+    "auto_threshold": ({}, 10),
+    "max_control_points": ({}, 10),
+    "blas_threads": ({}, 2),
+}
+#: Settings under which the field does not change a result (so the key must not move).
+IDLE = {
+    "control_point_spacing": {"control_points": "dense"},
+    "control_point_scale": {},
+    "shape_tol": {},
+    "ftol": {"stopping": "shape"},
+    "gtol": {"stopping": "shape"},
+    "max_corrections": {"solver": "gauss-newton"},
+    "max_line_search": {"solver": "gauss-newton"},
+    "max_inner": {},
+    "joint_metric": {},
+    "refresh_every": {"optimize_control_points": True, "joint_metric": False},
+    "rel_ridge": {"precondition": False},
+    "auto_threshold": {"control_points": "grid"},
+    "max_control_points": {},
+}
+
+
+def test_every_field_is_flipped_by_the_test():
+    assert set(FLIPS) == {f.name for f in dataclasses.fields(RegistrationSettings)}
+
+
+@pytest.mark.parametrize("name", sorted(FLIPS))
+def test_the_key_moves_exactly_with_the_fields_that_change_a_result(name):
+    """Flip each field where it is in effect (the key changes) and where it is not (the
+    key stays): the key names what a result depends on, and nothing else."""
+    base, value = FLIPS[name]
+    settings = RegistrationSettings(sigma=1.0, **base)
+    flipped = settings.replace(**{name: value})
+    if name == "max_control_points":  # a budget: refuses, never changes a result
+        assert flipped.key() == settings.key()
+        assert name not in settings.in_effect()
+        return
+    if name == "kernel_backend" and not numba_available():
+        pytest.skip("numba is not installed")
+    assert name in settings.in_effect()
+    assert flipped.key() != settings.key()
+    if name in IDLE:
+        idle = RegistrationSettings(sigma=1.0, **IDLE[name])
+        assert name not in idle.in_effect()
+        assert idle.replace(**{name: value}).key() == idle.key()
+
+
+def test_the_key_has_the_backend_that_runs_and_the_library_version(monkeypatch):
     base = RegistrationSettings(sigma=1.0)
-    changes = {
-        "sigma": 2.0,
-        "control_points": "grid",
-        "control_point_spacing": 0.5,
-        "optimize_control_points": True,
-        "integrator": "rk2",
-        "n_steps": 11,
-        "stopping": "shape",
-        "shape_tol": 1e-4,
-        "ftol": 1e-8,
-        "max_iter": 7,
-        "rel_ridge": 1e-3,
-    }
-    keys = {base.key()}
-    for name, value in changes.items():
-        keys.add(base.replace(**{name: value}).key())
-    assert len(keys) == len(changes) + 1
-    assert base.replace(kernel_backend="numpy").key() != base.replace(kernel_backend="numba").key()
     # "auto" is resolved: it names the backend that runs
     assert base.key() == base.replace(kernel_backend=base.resolved_backend()).key()
-
-
-def test_key_leaves_out_the_spacing_while_it_is_the_default():
-    """Settings that set neither ``control_point_spacing`` nor ``control_point_indices``
-    keep the key they had before the fields existed (the study's result folders are
-    named by it)."""
-    base = RegistrationSettings(sigma=20.0, control_points="grid", stopping="shape")
-    payload = base.as_dict()
-    del payload["control_point_spacing"], payload["control_point_indices"]
-    payload.update(kernel_backend=base.resolved_backend(), schema=1)
+    before = base.key()
+    monkeypatch.setattr(settings_module, "library_version", lambda: "99.0")
+    assert base.key() != before
+    payload = {n: base.as_dict()[n] for n in base.in_effect()}
+    payload.update(kernel_backend=base.resolved_backend(), schema=2, library_version="99.0")
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)
     assert base.key() == hashlib.sha256(text.encode()).hexdigest()[:20]
-    assert base.replace(control_point_spacing=20.0).key() != base.key()
+
+
+def test_the_solvers_options_and_rule_come_from_the_settings():
+    s = RegistrationSettings(sigma=1.0, max_corrections=7, stopping="shape", shape_tol=0.01)
+    assert s.solver_options() == SolverOptions(max_corrections=7)
+    rule = s.stopping_rule()
+    assert (rule.kind, rule.shape_tol, rule.max_iter) == ("shape", 0.01, 500)
+    # the defaults are written once, in the solvers' options and the rule
+    d = RegistrationSettings(sigma=1.0)
+    assert d.solver_options() == SolverOptions()
+    assert (d.ftol, d.gtol, d.shape_tol, d.max_iter) == (
+        StoppingRule().ftol, StoppingRule().gtol, StoppingRule().shape_tol, StoppingRule().max_iter
+    )
+    with pytest.raises(ValueError, match="max_inner"):
+        SolverOptions(max_inner=0)
 
 
 def test_vertex_indices_round_trip_and_enter_the_key():

@@ -39,7 +39,7 @@ def test_built_problem_solved_by_hand_equals_register():
     _, template, target, _ = exact_pair(3)
     settings = RegistrationSettings(sigma=SIGMA, control_points="grid", max_iter=200)
     problem, x0 = problem_at(template, target, 0.3, settings)
-    opt = SOLVERS["lbfgsb"](problem, x0, settings, StoppingRule.from_settings(settings))
+    opt = SOLVERS["lbfgsb"](problem, x0, settings.solver_options(), settings.stopping_rule())
     mine = problem.result(opt)
     res = register(template, target, 0.3, settings)
     np.testing.assert_allclose(mine.momenta, res.momenta, rtol=1e-12, atol=1e-14)

@@ -13,8 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from manifolds.numerics.solvers import StoppingRule
-
 from .cohort import Cohort, make_synthetic_cohort
 from .reporting import write_report
 from .running import StudyConfig, run_study
@@ -87,7 +85,7 @@ def run(
     paths = {}
     if report:
         shapes = {s.name: s.ed for s in cohort.subjects}
-        rule = StoppingRule.from_settings(config.registration)
+        rule = config.registration.stopping_rule()
         paths = write_report(outcome.results, output, cohort.atlas, cohort.faces, shapes,
                              stopping=rule.describe(), units=units)  # fmt: skip
     return StudyRun(outcome, paths)

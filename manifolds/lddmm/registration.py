@@ -29,7 +29,7 @@ from manifolds.data_terms import DataTerm, SquaredDistance
 
 from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
-from ..numerics.solvers import StoppingRule, get_solver
+from ..numerics.solvers import get_solver
 from .control_points import is_dense
 from .flow_models import FlowModel, HamiltonianFlow
 from .kernels import GaussianKernel
@@ -174,7 +174,9 @@ def register(
         flow, template, target, alpha, settings, control_points=control_points,
         initial_momenta=initial_momenta, kernel=kernel,
     )  # fmt: skip
-    opt = get_solver(settings.solver)(problem, x0, settings, StoppingRule.from_settings(settings))
+    opt = get_solver(settings.solver)(
+        problem, x0, settings.solver_options(), settings.stopping_rule()
+    )
     result = problem.result(opt)
     if warn and not result.converged:
         warnings.warn(

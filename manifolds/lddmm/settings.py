@@ -16,29 +16,44 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from importlib import metadata
 from typing import Any
 
 import numpy as np
 
 from ..errors import ManifoldError
 from ..kernels.backends import resolve_backend
-from ..validation import check_float, check_int
+from ..numerics.integrators import INTEGRATORS, Integrator
+from ..numerics.solvers import SOLVERS, SolverOptions, StoppingRule
+from ..validation import check_array, check_float, check_int
+from .control_points import farthest_point_indices, policy_spacing, resolve_control_points
+from .kernels import GaussianKernel
 
 __all__ = ["RegistrationSettings", "STOPPING_RULES", "SETTINGS_SCHEMA"]
 
 #: Version of the settings' serialisation; part of :meth:`RegistrationSettings.key`.
-SETTINGS_SCHEMA = 1
+SETTINGS_SCHEMA = 2
 #: ``"objective"``: the relative decrease of the objective and the largest gradient
 #: entry (``ftol``, ``gtol``); ``"shape"``: the change of the deformed template and
 #: the gradient's predicted change in the shapes' unit (``shape_tol``).
 STOPPING_RULES = ("objective", "shape")
 _POLICIES = ("auto", "dense", "grid", "finegrid", "vertices")
-#: Fields left out of :meth:`RegistrationSettings.key` while they hold their default
-#: None, so that settings which do not use them keep the keys they had before the
-#: fields existed (and their cached results).
-_KEY_OPTIONAL = ("control_point_spacing", "control_point_indices")
 _BACKENDS = ("auto", "numpy", "numba")
+#: The defaults of the solvers' options and of the stopping rule, written once, there.
+_SOLVER = SolverOptions()
+_RULE = StoppingRule()
+#: Policies whose control points are spaced by ``control_point_spacing`` ("auto" may
+#: choose a grid).
+_SPACED_POLICIES = ("auto", "grid", "finegrid", "vertices")
+
+
+def library_version() -> str:
+    """The installed version of the library (part of :meth:`RegistrationSettings.key`)."""
+    try:
+        return metadata.version("symladders")
+    except metadata.PackageNotFoundError:  # pragma: no cover - run from a source tree
+        return "unknown"
 
 
 def _check_choice(value, choices, name: str) -> str:
@@ -127,21 +142,21 @@ class RegistrationSettings:
     n_steps: int = 10
     solver: str = "lbfgsb"
     stopping: str = "objective"
-    shape_tol: float = 1e-3
-    ftol: float = 1e-11
-    gtol: float = 1e-9
-    max_iter: int = 500
-    max_corrections: int = 100
-    max_line_search: int = 30
-    max_inner: int = 50
+    shape_tol: float = _RULE.shape_tol
+    ftol: float = _RULE.ftol
+    gtol: float = _RULE.gtol
+    max_iter: int = _RULE.max_iter
+    max_corrections: int = _SOLVER.max_corrections
+    max_line_search: int = _SOLVER.max_line_search
+    max_inner: int = _SOLVER.max_inner
     joint_metric: bool = True
-    refresh_every: int = 20
+    refresh_every: int = _SOLVER.refresh_every
     precondition: bool = True
     rel_ridge: float = 1e-2
     kernel_backend: str = "auto"
     auto_threshold: int = 1000
     max_control_points: int = 20_000
-    blas_threads: int | None = field(default=1)
+    blas_threads: int | None = _SOLVER.blas_threads
 
     def __post_init__(self):
         name = "RegistrationSettings"
@@ -159,14 +174,10 @@ class RegistrationSettings:
         if self.control_point_indices is not None:
             put(self, "control_point_indices", self._check_indices(self.control_point_indices))
         if self.integrator is not None:
-            from ..numerics.integrators import INTEGRATORS, Integrator
-
             integ = self.integrator
             if isinstance(integ, Integrator):
                 integ = integ.name
             put(self, "integrator", _check_choice(integ, tuple(INTEGRATORS), "integrator"))
-        from ..numerics.solvers import SOLVERS
-
         put(self, "solver", _check_choice(self.solver, tuple(SOLVERS), "solver"))
         put(self, "stopping", _check_choice(self.stopping, STOPPING_RULES, "stopping"))
         put(self, "kernel_backend", _check_choice(self.kernel_backend, _BACKENDS, "kernel_backend"))
@@ -188,8 +199,6 @@ class RegistrationSettings:
     def _check_policy(policy):
         if isinstance(policy, str):
             return _check_choice(policy, _POLICIES, "control_points")
-        from ..validation import check_array
-
         arr = check_array(policy, (), "RegistrationSettings: control_points")
         if arr.ndim != 2 or arr.shape[1] not in (2, 3) or arr.shape[0] < 1:
             raise ManifoldError(
@@ -231,14 +240,10 @@ class RegistrationSettings:
     def spacing(self) -> float | None:
         """Spacing between control points of the policy (in the shapes' unit), or None
         for the policies without one (:func:`~manifolds.lddmm.control_points.policy_spacing`)."""
-        from .control_points import policy_spacing
-
         return policy_spacing(self.control_points_policy, self.sigma, self.control_point_spacing)
 
     def resolve_control_points(self, template: np.ndarray) -> np.ndarray:
         """The control points of ``template`` ``(k, d)`` under these settings, ``(n_cp, d)``."""
-        from .control_points import resolve_control_points
-
         return resolve_control_points(
             template,
             self.control_points_policy,
@@ -259,8 +264,6 @@ class RegistrationSettings:
         """
         if self.control_points != "vertices" or self.control_point_indices is not None:
             return self
-        from .control_points import farthest_point_indices
-
         indices = farthest_point_indices(np.asarray(reference, dtype=float), self.spacing)
         return self.replace(control_point_indices=tuple(int(i) for i in indices))
 
@@ -270,8 +273,6 @@ class RegistrationSettings:
 
     def make_kernel(self, block_size: int | None = None):
         """The :class:`~manifolds.lddmm.GaussianKernel` of these settings."""
-        from .kernels import GaussianKernel
-
         return GaussianKernel(self.sigma, backend=self.kernel_backend, block_size=block_size)
 
     def replace(self, **changes) -> RegistrationSettings:
@@ -304,17 +305,61 @@ class RegistrationSettings:
         base = cls(sigma=data["sigma"])
         return base.replace(**{k: v for k, v in data.items() if k != "sigma"})
 
+    def solver_options(self) -> SolverOptions:
+        """The options the solver takes (:class:`~manifolds.numerics.solvers.SolverOptions`)."""
+        return SolverOptions(**{f: getattr(self, f) for f in SolverOptions.__dataclass_fields__})
+
+    def stopping_rule(self) -> StoppingRule:
+        """The stopping rule of these settings (a new one: a rule records its run)."""
+        return StoppingRule(self.stopping, self.ftol, self.gtol, self.shape_tol, self.max_iter)
+
+    def in_effect(self) -> tuple[str, ...]:
+        """The fields that change a registration's result under these settings.
+
+        Left out: the tolerances of the stopping rule not in use (``shape_tol`` under
+        ``"objective"``, ``ftol`` and ``gtol`` under ``"shape"``), the options of the
+        solvers not in use, the joint metric's fields without optimised control points
+        and a preconditioner, ``rel_ridge`` without a preconditioner, ``auto_threshold``
+        but for the ``"auto"`` policy, the spacing and vertex indices of the policies
+        that do not read them, and ``max_control_points`` (a
+        budget that refuses settings, never changes a result). ``blas_threads`` stays:
+        threaded BLAS products may sum in another order (the last bits).
+        """
+        out = ["sigma", "control_points", "optimize_control_points", "integrator", "n_steps",
+               "solver", "stopping", "max_iter", "precondition", "kernel_backend"]  # fmt: skip
+        out += ["shape_tol"] if self.stopping == "shape" else ["ftol", "gtol"]
+        policy = self.control_points if isinstance(self.control_points, str) else "array"
+        if policy in _SPACED_POLICIES:
+            out.append("control_point_spacing")
+        if policy == "vertices":
+            out.append("control_point_indices")
+        if policy == "auto":
+            out.append("auto_threshold")
+        if self.precondition:
+            out.append("rel_ridge")
+        solver_fields = set(SolverOptions.in_effect(self.solver))
+        joint = self.optimize_control_points and self.precondition and self.joint_metric
+        if not joint:
+            solver_fields.discard("refresh_every")
+        if self.optimize_control_points:
+            out.append("control_point_scale")
+            if self.precondition:
+                out.append("joint_metric")
+        out += sorted(solver_fields)
+        return tuple(out)
+
     def key(self) -> str:
-        """Stable hash of the settings (hex), with the kernel backend resolved.
+        """Stable hash (hex) of what changes a result: :meth:`in_effect`'s fields, the
+        kernel backend that runs (``"auto"`` resolved: the compiled kernels' results
+        differ from numpy's in the last bits) and the library's version.
 
         Two settings objects with the same key give the same registrations to the
-        last bit on the same machine and library version.
+        last bit on the same machine.
         """
-        payload = self.as_dict()
-        for name in _KEY_OPTIONAL:
-            if payload[name] is None:
-                del payload[name]
+        full = self.as_dict()
+        payload = {name: full[name] for name in self.in_effect()}
         payload["kernel_backend"] = self.resolved_backend()
         payload["schema"] = SETTINGS_SCHEMA
+        payload["library_version"] = library_version()
         text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:20]

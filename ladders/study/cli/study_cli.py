@@ -206,9 +206,8 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
         print(f"resumed: {len(outcome.skipped)} (subject, alpha^2) pair(s) were already done")
         if not args.no_meshes:
             _note_pairs_without_meshes(outcome)
-    from manifolds.numerics.solvers import StoppingRule
 
-    rule = StoppingRule.from_settings(config.registration)
+    rule = config.registration.stopping_rule()
     pairs = [p for r in outcome.results for p in r.pairs]
     if pairs:
         print()

@@ -9,20 +9,23 @@
   (``"gauss-newton"``), for least-squares data terms;
 - :mod:`.krylov_bound`: the fewest products any Krylov-type solver needs on a
   quadratic model (a lower bound to judge solvers by);
+- :mod:`.options`: :class:`SolverOptions`, the solvers' own knobs and their defaults;
 - :mod:`.blas`: BLAS thread limits during a run.
 
 :data:`SOLVERS` maps a name (``RegistrationSettings.solver``) to a function
-``(problem, x0, settings) -> OptimizationResult``; :func:`get_solver` looks one up.
+``(problem, x0, options, rule) -> OptimizationResult``; :func:`get_solver` looks one
+up. The solvers know nothing of the spaces or of their settings.
 """
 
 from .blas import limit_blas_threads
 from .gauss_newton import minimize_gauss_newton, steihaug_cg
 from .krylov_bound import KrylovBound, krylov_lower_bound
 from .lbfgsb import minimize_lbfgsb
+from .options import SolverOptions
 from .result import OptimizationResult, SolverProblem
 from .stopping import StoppingRule, TraceRow
 
-#: Solver name -> ``(problem, x0, settings) -> OptimizationResult``.
+#: Solver name -> ``(problem, x0, options, rule) -> OptimizationResult``.
 SOLVERS = {"lbfgsb": minimize_lbfgsb, "gauss-newton": minimize_gauss_newton}
 
 
@@ -41,6 +44,7 @@ __all__ = [
     "get_solver",
     "OptimizationResult",
     "SolverProblem",
+    "SolverOptions",
     "StoppingRule",
     "TraceRow",
     "minimize_lbfgsb",

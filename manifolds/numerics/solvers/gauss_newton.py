@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .blas import limit_blas_threads
+from .options import SolverOptions
 from .result import OptimizationResult
 from .stopping import StoppingRule
 
@@ -91,25 +92,28 @@ def _to_boundary(p, d, radius) -> float:
     return (-pd + np.sqrt(max(pd * pd + dd * (radius * radius - pp), 0.0))) / dd
 
 
-def minimize_gauss_newton(problem, x0, settings, rule: StoppingRule | None = None):
+def minimize_gauss_newton(
+    problem, x0, options: SolverOptions | None = None, rule: StoppingRule | None = None
+):
     """Minimise ``problem`` (which provides ``gauss_newton_product``) from ``x0``.
 
     Parameters
     ----------
     problem : SolverProblem with ``gauss_newton_product(x, v)``
     x0 : array
-    settings : RegistrationSettings
-        ``max_iter`` (outer iterations), ``max_inner`` (CG iterations per step),
-        ``blas_threads`` and the stopping rule.
+    options : SolverOptions, optional
+        ``max_inner`` (CG iterations per step) and ``blas_threads``.
     rule : StoppingRule, optional
+        Tolerances and iteration limit (outer iterations; default ``StoppingRule()``).
 
     Returns
     -------
     OptimizationResult
     """
-    rule = StoppingRule.from_settings(settings) if rule is None else rule
+    options = SolverOptions() if options is None else options
+    rule = StoppingRule() if rule is None else rule
     x = np.asarray(x0, dtype=float).ravel().copy()
-    with limit_blas_threads(settings.blas_threads):
+    with limit_blas_threads(options.blas_threads):
         f, g = problem.value_and_gradient(x)
         n_evals, history = 1, [f]
         rule.start(problem, x, f)
@@ -128,7 +132,7 @@ def minimize_gauss_newton(problem, x0, settings, rule: StoppingRule | None = Non
                 g,
                 radius,
                 eta,
-                settings.max_inner,
+                options.max_inner,
             )
             if pred <= 0.0:
                 converged = rule.accepts_stall(problem, x, g)

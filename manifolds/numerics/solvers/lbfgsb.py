@@ -6,6 +6,7 @@ import numpy as np
 import scipy.optimize
 
 from .blas import limit_blas_threads
+from .options import SolverOptions
 from .result import OptimizationResult
 from .stopping import StoppingRule
 
@@ -31,18 +32,19 @@ class _Counted:
         return self.f, self.g.copy()
 
 
-def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> OptimizationResult:
+def minimize_lbfgsb(
+    problem, x0, options: SolverOptions | None = None, rule: StoppingRule | None = None
+) -> OptimizationResult:
     """Minimise ``problem`` from ``x0`` with scipy's L-BFGS-B.
 
     Parameters
     ----------
     problem : SolverProblem
     x0 : array
-    settings : RegistrationSettings
-        ``max_iter``, ``max_corrections``, ``max_line_search``, ``blas_threads``
-        and the stopping rule's tolerances.
+    options : SolverOptions, optional
+        ``max_corrections``, ``max_line_search``, ``refresh_every``, ``blas_threads``.
     rule : StoppingRule, optional
-        Defaults to the rule of ``settings``. With the ``"objective"`` rule, scipy's
+        Tolerances and iteration limit (default ``StoppingRule()``). With the ``"objective"`` rule, scipy's
         own ``ftol`` / ``gtol`` test is used (the same test); with ``"shape"``, the
         rule is checked after every iteration.
 
@@ -50,7 +52,8 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
     -------
     OptimizationResult
     """
-    rule = StoppingRule.from_settings(settings) if rule is None else rule
+    options = SolverOptions() if options is None else options
+    rule = StoppingRule() if rule is None else rule
     fun = _Counted(problem)
     x0 = np.asarray(x0, dtype=float).ravel()
     history: list = []
@@ -68,9 +71,9 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
     objective_rule = rule.kind == "objective"
     # A problem whose metric depends on the iterate (``refreshable``) is restarted
     # every ``refresh_every`` iterations in refreshed variables.
-    every = int(settings.refresh_every) if getattr(problem, "refreshable", False) else 0
+    every = int(options.refresh_every) if getattr(problem, "refreshable", False) else 0
     n_iter = 0
-    with limit_blas_threads(settings.blas_threads):
+    with limit_blas_threads(options.blas_threads):
         f0 = fun(x0.copy())[0]
         history.append(f0)
         rule.start(problem, x0, f0)
@@ -87,8 +90,8 @@ def minimize_lbfgsb(problem, x0, settings, rule: StoppingRule | None = None) -> 
                     "maxiter": int(min(budget, every) if every > 0 else budget),
                     "ftol": float(rule.ftol) if objective_rule else 0.0,
                     "gtol": float(rule.gtol) if objective_rule else 0.0,
-                    "maxcor": int(settings.max_corrections),
-                    "maxls": int(settings.max_line_search),
+                    "maxcor": int(options.max_corrections),
+                    "maxls": int(options.max_line_search),
                 },
             )
             n_iter += int(res.nit)

@@ -74,13 +74,6 @@ class StoppingRule:
         self._previous_shape = None
         self.trace: list[TraceRow] = []
 
-    @classmethod
-    def from_settings(cls, settings) -> StoppingRule:
-        """The rule of a :class:`~manifolds.lddmm.RegistrationSettings`."""
-        return cls(
-            settings.stopping, settings.ftol, settings.gtol, settings.shape_tol, settings.max_iter
-        )
-
     def __repr__(self) -> str:
         if self.kind == "shape":
             return f"StoppingRule('shape', shape_tol={self.shape_tol:g})"
