@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import ladders.study.preparation as preparation
+import ladders.study.preparation.atlas_run as atlas_run
 from ladders.study import read_mesh, write_mesh
 from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
 from ladders.study.preparation import remesh, simulate_segmentations
@@ -118,15 +119,30 @@ def test_atlas_of_corresponding_meshes(corresponded, atlas_folder, tmp_path):
     np.testing.assert_array_equal(faces, read_mesh(corresponded[0] / "out" / "atlas.ply")[1])
 
 
-def test_an_interrupted_atlas_keeps_its_last_iterate(atlas_folder, tmp_path, monkeypatch):
-    original = preparation.estimate_atlas
+def test_build_atlas_is_what_the_command_runs(atlas_folder, tmp_path):
+    """The Python path of ``symladders atlas``: the same record, errors naming the argument."""
+    seen = []
+    run = atlas_run.build_atlas(atlas_folder, tmp_path / "A.vtk", term="varifold", max_iter=1,
+                                progress=lambda it, f, n: seen.append(f))  # fmt: skip
+    record = json.loads(run.record_path.read_text())
+    assert record == json.loads(json.dumps(run.record, default=str))
+    assert record["term"] == "varifold" and record["settings"]["data_term"] == "varifold"
+    assert record["objectives"] == seen and record["n_iter"] == 1
+    assert read_mesh(tmp_path / "A.vtk")[0].shape == run.result.vertices.shape
+    with pytest.raises(ValueError, match="^start 'nobody'"):
+        atlas_run.build_atlas(atlas_folder, tmp_path / "B.vtk", start="nobody")
+    with pytest.raises(ValueError, match="^term: expected one of"):
+        atlas_run.build_atlas(atlas_folder, tmp_path / "B.vtk", term="landmark")
+    assert not (tmp_path / "B.vtk").exists()
 
+
+def test_an_interrupted_atlas_keeps_its_last_iterate(atlas_folder, tmp_path, monkeypatch):
     def interrupted(meshes, settings, **kwargs):
         kwargs["checkpoint"](0, meshes[0][0])
         kwargs["checkpoint"](1, meshes[0][0] + 1.0)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(preparation, "estimate_atlas", interrupted)
+    monkeypatch.setattr(atlas_run, "estimate_atlas", interrupted)
     output = tmp_path / "T.vtk"
     status, _, err = run_cli("atlas", "--meshes", atlas_folder, "-o", output)
     assert status == 130
@@ -136,7 +152,7 @@ def test_an_interrupted_atlas_keeps_its_last_iterate(atlas_folder, tmp_path, mon
     )
     record = json.loads(output.with_suffix(".json").read_text())
     assert record["interrupted"] and not record["converged"] and record["n_iter"] == 1
-    monkeypatch.setattr(preparation, "estimate_atlas", original)
+    monkeypatch.undo()
     status, out, err = run_cli("atlas", "--meshes", atlas_folder, "-o", tmp_path / "T2.vtk",
                                "--start", output, "--max-iter", "1")  # fmt: skip
     assert status == 0, err

@@ -12,6 +12,8 @@
   segmentations into a folder the study reads, with a quality table
   (:mod:`.quality_table`), failures recorded and resume;
 - :mod:`.atlas`: :func:`estimate_atlas`, the LDDMM atlas of end-diastolic meshes;
+  :mod:`.atlas_run`: :func:`build_atlas`, the atlas of a folder written with its
+  record (what ``symladders atlas`` runs);
 - :mod:`.surface_distance`: Hausdorff and mean surface distances;
 - :mod:`.remeshing`: :func:`remesh`, another triangulation of a surface;
   :mod:`.simulation`: :func:`simulate_segmentations` of a cohort (tests, tutorial).
@@ -26,6 +28,7 @@ from .alignment import (
     random_rigid_transform,
 )
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
+from .atlas_run import AtlasInterrupted, AtlasRun, build_atlas
 from .cohort_correspondence import CohortCorrespondence, correspond_cohort, scan_segmentations
 from .cohort_units import AtlasInputs, check_cohort_units, read_atlas_inputs
 from .correspondence import (
@@ -63,6 +66,9 @@ __all__ = [
     "random_rigid_transform",
     "AtlasResult",
     "estimate_atlas",
+    "build_atlas",
+    "AtlasRun",
+    "AtlasInterrupted",
     "meshes_correspond",
     "AtlasInputs",
     "read_atlas_inputs",
