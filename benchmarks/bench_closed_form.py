@@ -57,7 +57,7 @@ def batch_configuration(space, rng, size: int = BATCH):
     return base, end, space.random_tangent(base, rng, scale=1.0)
 
 
-def bench_pole_ladder(repeats: int) -> bool:
+def bench_pole_ladder(repeats: int, rows: list | None = None) -> bool:
     space = Hypersphere(2)
     base, end, u = batch_configuration(space, np.random.default_rng(0))
     exact = space.parallel_transport(base, end, u)
@@ -75,6 +75,11 @@ def bench_pole_ladder(repeats: int) -> bool:
             f" | per transport best {best / BATCH * 1e6:6.3f} us,"
             f" median {median / BATCH * 1e6:6.3f} us | max error vs exact {err:.1e}"
         )
+        if rows is not None:
+            target = (f"<= {TARGET_SECONDS * 1e3:.1f} ms: "
+                      f"{'met' if best <= TARGET_SECONDS else 'not met'}") if n_rungs == 1 else "-"  # fmt: skip
+            rows.append(f"| {n_rungs} | {best * 1e3:.3f} ms | {median * 1e3:.3f} ms | "
+                        f"{best / BATCH * 1e6:.3f} us | {err:.1e} | {target} |")  # fmt: skip
         if n_rungs == 1:
             met = best <= TARGET_SECONDS
             print(
@@ -107,10 +112,23 @@ def bench_throughput(repeats: int) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=15, help="timed runs per figure")
+    parser.add_argument("--publish", action="store_true",
+                        help="write the pole-ladder table to docs/generated/closed_form.md")  # fmt: skip
     args = parser.parse_args(argv)
     print(f"numpy {np.__version__}, float64, {args.repeats} repeats\n")
-    bench_pole_ladder(args.repeats)
+    rows: list = []
+    bench_pole_ladder(args.repeats, rows)
     bench_throughput(args.repeats)
+    if args.publish:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from generated_tables import publish
+
+        header = ("| rungs | 1,000 transports (best) | median | per transport | largest error "
+                  "against the exact transport | target |\n|---|---|---|---|---|---|")  # fmt: skip
+        note = (f"Pole ladder on S^2: {BATCH:,} transports in one batched call, numpy "
+                f"{np.__version__}, float64, best and median of {args.repeats} runs.")  # fmt: skip
+        publish("closed_form", note + "\n\n" + header + "\n" + "\n".join(rows),
+                "python benchmarks/bench_closed_form.py --publish")  # fmt: skip
     return 0
 
 

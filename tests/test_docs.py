@@ -15,8 +15,18 @@ def test_sphinx_builds_api_reference(tmp_path):
     pytest.importorskip("numpydoc")
     pytest.importorskip("myst_parser")
     proc = subprocess.run(
-        [sys.executable, "-m", "sphinx", "-b", "html", "-q", "-W", "--keep-going",
-         str(ROOT / "docs"), str(tmp_path)],  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "sphinx",
+            "-b",
+            "html",
+            "-q",
+            "-W",
+            "--keep-going",
+            str(ROOT / "docs"),
+            str(tmp_path),
+        ],  # fmt: skip
         capture_output=True,
         text=True,
         timeout=600,

@@ -118,7 +118,10 @@ def test_the_solvers_options_and_rule_come_from_the_settings():
     d = RegistrationSettings(sigma=1.0)
     assert d.solver_options() == SolverOptions()
     assert (d.ftol, d.gtol, d.shape_tol, d.max_iter) == (
-        StoppingRule().ftol, StoppingRule().gtol, StoppingRule().shape_tol, StoppingRule().max_iter
+        StoppingRule().ftol,
+        StoppingRule().gtol,
+        StoppingRule().shape_tol,
+        StoppingRule().max_iter,
     )
     with pytest.raises(ValueError, match="max_inner"):
         SolverOptions(max_inner=0)
