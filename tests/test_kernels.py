@@ -138,3 +138,41 @@ def test_compiled_backend_is_the_default():
     """numba is a dependency: the default kernel runs the compiled sums."""
     assert numba_available()
     assert GaussianKernel(SIGMA).backend == "numba"
+
+
+def test_the_parallel_sums_equal_the_serial_ones_to_the_last_bit():
+    """Above PARALLEL_MIN_PAIRS the compiled sums run on every thread numba has; the result
+    does not depend on the number of threads (and agrees with numpy)."""
+    from manifolds.kernels import kernel_threads
+    from manifolds.kernels.numba_primitives import PARALLEL_MIN_PAIRS
+
+    x, c, mom, cot = data(n=700, m=400, dim=3, seed=3)
+    assert x.shape[0] * c.shape[0] >= PARALLEL_MIN_PAIRS and c.shape[0] ** 2 >= PARALLEL_MIN_PAIRS
+    kernel = GaussianKernel(SIGMA, backend="numba")
+    with kernel_threads(1):
+        serial = all_sums(kernel, x, c, mom, cot)
+    with kernel_threads(2):
+        parallel = all_sums(kernel, x, c, mom, cot)
+    for a, b in zip(serial, parallel):
+        np.testing.assert_array_equal(a, b)
+    ref = all_sums(GaussianKernel(SIGMA, backend="numpy"), x, c, mom, cot)
+    for a, b in zip(parallel, ref):
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11 * np.abs(b).max())
+
+
+def test_workers_share_the_cores_and_a_lone_computation_takes_them_all():
+    import numba
+
+    from manifolds.kernels import kernel_threads, threads_per_worker
+
+    assert threads_per_worker(1) is None and threads_per_worker(None) is None
+    assert threads_per_worker(2, cores=2) == 1
+    assert threads_per_worker(2, cores=8) == 4
+    assert threads_per_worker(-1, cores=8) == 1
+    assert threads_per_worker(16, cores=8) == 1
+    before = numba.get_num_threads()
+    with kernel_threads(1):
+        assert numba.get_num_threads() == 1
+    assert numba.get_num_threads() == before
+    with kernel_threads(None):
+        assert numba.get_num_threads() == before

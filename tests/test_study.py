@@ -271,3 +271,27 @@ def test_claim_a_holds_at_every_alpha_with_control_points_at_the_vertices(tmp_pa
             without = np.array([r.at(a).measure("no_residual", name) for r in out.results])
             assert with_res.mean() < without.mean(), (a, name, with_res, without)
             assert np.sum(with_res < without) >= 2, (a, name, with_res, without)
+
+
+def test_one_job_with_parallel_kernel_sums_gives_the_results_of_two_workers(tmp_path):
+    """A lone run lets the kernel sums use every core (1,009 vertices x 143 control points
+    is above the parallel threshold); two workers keep one thread each. Same numbers."""
+    from ladders.study.running.result_codec import encode
+
+    cohort = make_synthetic_cohort(2, seed=3)
+    config = StudyConfig.build(alpha2=(1.0,))
+    runs = {
+        jobs: run_study(config, cohort.atlas, cohort.faces, cohort.subjects, tmp_path / str(jobs),
+                        jobs=jobs, progress=False, meshes=False)  # fmt: skip
+        for jobs in (1, 2)
+    }
+
+    def numbers(outcome):
+        out = []
+        for r in outcome.results:
+            d = encode(r.at(1.0))
+            d.pop("seconds", None)
+            out.append(json.dumps(d, sort_keys=True))
+        return out
+
+    assert numbers(runs[1]) == numbers(runs[2])

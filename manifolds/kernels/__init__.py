@@ -4,7 +4,9 @@
   ``"auto"`` rule (:func:`resolve_backend`);
 - :mod:`.numba_primitives`: the compiled primitives every compiled kernel is built
   from (the exponential, point layouts, the rule for parallel loops); imported by the
-  compiled backends only, so that importing this package does not compile anything.
+  compiled backends only, so that importing this package does not compile anything;
+- :mod:`.threads`: how many threads the compiled sums use (:func:`kernel_threads`,
+  :func:`threads_per_worker`): every core alone, one per worker in a batch.
 
 This layer imports no space: :mod:`manifolds.lddmm` and :mod:`manifolds.data_terms`
 import it, never each other.
@@ -18,6 +20,7 @@ from .backends import (
     register_backend,
     resolve_backend,
 )
+from .threads import kernel_threads, threads_per_worker
 
 __all__ = [
     "AUTO_ORDER",
@@ -26,4 +29,6 @@ __all__ = [
     "numba_available",
     "register_backend",
     "resolve_backend",
+    "kernel_threads",
+    "threads_per_worker",
 ]

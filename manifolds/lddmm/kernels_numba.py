@@ -10,9 +10,9 @@ polynomial (:func:`manifolds.kernels.numba_primitives.gexp`, relative error belo
 ``3e-14`` and exactly zero below ``exp(-40) ~ 4e-18``; the compiled primitives shared
 with the surface data terms live in the kernel layer :mod:`manifolds.kernels`). Outer loops run in parallel over rows above a
 size threshold; sums over columns that several rows write to go through one
-buffer per chunk of rows. Parallel loops only pay off when every call has
-milliseconds of work: below ``PARALLEL_MIN_PAIRS`` pairs the serial loop is used,
-since on a shared machine each parallel region waits for its slowest thread.
+buffer per chunk of rows. Below ``PARALLEL_MIN_PAIRS`` pairs (about a quarter of a
+millisecond of work) the serial loop is used; batches of workers run with one kernel
+thread each (:mod:`manifolds.kernels.threads`).
 """
 
 from __future__ import annotations

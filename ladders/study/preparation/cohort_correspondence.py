@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 from joblib import Parallel, delayed
 
+from manifolds.kernels import kernel_threads, threads_per_worker
+
 from ..cohort.mesh_folder import natural_key, scan_mesh_folder
 from ..files import array_digest, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
@@ -130,7 +132,13 @@ def _run(tasks, records, outcome, jobs, progress, total):
         yield record
 
 
-def _subject(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -> dict:
+def _subject(name, slot, *, threads=None, **kwargs) -> dict:
+    """Correspond one subject with the kernel sums on ``threads`` threads (a worker's share)."""
+    with kernel_threads(threads):
+        return _correspond_one(name, slot, **kwargs)
+
+
+def _correspond_one(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -> dict:
     """Correspond one subject; the record (status ok or failed) is written last."""
     record = {"subject": name, "fingerprint": fingerprint, "unit_factor": factor}
     try:
@@ -239,7 +247,8 @@ def correspond_cohort(
     write_mesh(output / f"atlas{ext}", *atlas_mesh, atomic=True)
     outcome = CohortCorrespondence(output, units=report.assumed_units)
     atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
-    jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext)
+    jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext,
+                     threads=threads_per_worker(jobs))  # fmt: skip
     factors = {n: report.factors.get(n, 1.0) for n in entries}
     records, pending = {}, []
     for name, slot in entries.items():

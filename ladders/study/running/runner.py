@@ -11,6 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from manifolds.kernels import kernel_threads, threads_per_worker
+from manifolds.numerics.solvers import limit_blas_threads
+
 from ..cohort import Subject
 from ..errors import CohortError
 from ..files import array_digest, atomic_write_text, config_hash
@@ -98,8 +101,21 @@ def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> PairResult |
     return FailedPair(subject.name, alpha2, error, trace, time.perf_counter() - start)
 
 
-def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshes=None) -> dict:
-    """Worker: compute the subject's pairs it can claim; each is stored as it finishes."""
+def _subject_task(
+    config, atlas, faces, subject, alphas, store, config_id, meshes=None, threads=None
+) -> dict:
+    """Worker: compute the subject's pairs it can claim; each is stored as it finishes.
+
+    ``threads``: the kernel sums' threads in this worker (:func:`threads_per_worker`).
+    BLAS runs on one thread whatever ``jobs`` (its small products gain nothing from more,
+    and a threaded BLAS sums in another order): a pair's numbers do not depend on the
+    number of workers.
+    """
+    with kernel_threads(threads), limit_blas_threads(1):
+        return _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes)
+
+
+def _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes) -> dict:
     report = {"subject": subject.name, "computed": [], "busy": []}
     for a2 in alphas:
         if not store.claim(subject.name, a2):
@@ -226,7 +242,9 @@ def run_study(
         computes only the new pairs; other settings go to another folder. A
         pair that raised is stored with its error and retried on the next run.
     jobs : int
-        Parallel workers (joblib); ``-1`` uses all cores. Inside a
+        Parallel workers (joblib); ``-1`` uses all cores. With one job the kernel sums
+        use every core; with several, each worker's share of them
+        (:func:`~manifolds.kernels.threads_per_worker`: no oversubscription). Inside a
         ``joblib.parallel_config(backend="dask")`` block the subjects run on
         a Dask cluster instead.
     progress : bool
@@ -254,8 +272,9 @@ def run_study(
     alphas = [float(a) for a in config.alpha2]
     by_name = {s.name: s for s in subjects}
     mesh_folder = output / "meshes" / config_id if meshes else None
+    threads = threads_per_worker(jobs)
     tasks = [
-        (config, atlas, faces, s, todo, store, config_id, mesh_folder)
+        (config, atlas, faces, s, todo, store, config_id, mesh_folder, threads)
         for s, todo in _pending(subjects, alphas, store, config_id)
     ]
     recomputed = dict(store.unusable)
