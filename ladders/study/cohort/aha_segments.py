@@ -128,7 +128,8 @@ def _ramp(x, half_width: float) -> np.ndarray:
     """Raised cosine from 0 (``x <= -h``) to 1 (``x >= h``), ``ramp(x) + ramp(-x) = 1``."""
     if half_width <= 0:
         return (np.asarray(x) >= 0).astype(float)
-    t = np.clip((np.asarray(x, dtype=float) + half_width) / (2.0 * half_width), 0.0, 1.0)
+    with np.errstate(over="ignore"):  # a subnormal width: +-inf, clipped to the step
+        t = np.clip((np.asarray(x, dtype=float) + half_width) / (2.0 * half_width), 0.0, 1.0)
     return 0.5 - 0.5 * np.cos(np.pi * t)
 
 
