@@ -51,6 +51,7 @@ from ladders.study.population import (  # noqa: E402
 )
 from ladders.study.population.analysis_outputs import plot_transport_scores  # noqa: E402
 
+DOCS_IMAGES = Path(__file__).resolve().parents[1] / "docs" / "images"
 COHORTS = {
     "hypokinesia": MotionAbnormality(),
     "hypokinesia_mild": MotionAbnormality(magnitude=0.2),
@@ -164,6 +165,7 @@ def run_analysis(work: Path, arms, cohorts, n_permutations: int, repetitions: in
             table = scores_markdown(scores)
             (work / f"scores_{arm}_{name}.csv").write_text(scores_csv(scores))
             plot_transport_scores(scores, work / f"scores_{arm}_{name}.png")
+            plot_transport_scores(scores, DOCS_IMAGES / f"population_{arm}_{name}.png")
             print(
                 f"\n{arm}, {name} ({len(labels)} subjects, {seconds:.0f} s):\n{table}", flush=True
             )
