@@ -72,7 +72,7 @@ def _fake_results(values: dict[str, float], inverse: float) -> list:
     return out
 
 
-def test_comparison_pairs_subjects_by_name_with_known_answers():
+def test_comparison_pairs_subjects_by_name_with_known_answers(tmp_path):
     from ladders.study.reporting.deformation_comparison import (
         compare_deformations,
         comparison_csv,
@@ -94,6 +94,13 @@ def test_comparison_pairs_subjects_by_name_with_known_answers():
     text = comparison_markdown(rows)
     assert "5 subjects" in text and "| 1 | residual | involutivity |" in text
     assert comparison_csv(rows).splitlines()[0].startswith("alpha2,variant,measure,n,")
+    from ladders.study.reporting import write_deformation_comparison
+
+    path, written = write_deformation_comparison(lddmm, svf, tmp_path / "both")
+    assert path.read_text() == written and "| 1 | residual | involutivity |" in written
+    assert (tmp_path / "both" / "comparison.csv").read_text() == comparison_csv(
+        compare_deformations(lddmm, svf)
+    )
 
 
 def test_cli_runs_both_deformations_and_compares_them(tmp_path, capsys):

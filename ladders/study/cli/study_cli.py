@@ -237,20 +237,13 @@ def _note_recomputed(outcome) -> None:
 
 
 def _write_comparison(outcomes: dict, output: Path) -> Path:
-    from ..files import atomic_write_text
-    from ..reporting.deformation_comparison import (
-        compare_deformations,
-        comparison_csv,
-        comparison_markdown,
-    )
+    from ..reporting import write_deformation_comparison
 
-    rows = compare_deformations(outcomes["lddmm"].results, outcomes["svf"].results)
-    units = [p.unit for r in outcomes["lddmm"].results for p in r.pairs]
-    text = comparison_markdown(rows, units[0] if units else "mm")
-    atomic_write_text(output / "comparison.csv", comparison_csv(rows))
-    atomic_write_text(output / "comparison.md", text)
+    path, text = write_deformation_comparison(
+        outcomes["lddmm"].results, outcomes["svf"].results, output
+    )
     print(text)
-    return output / "comparison.md"
+    return path
 
 
 def run_study_command(args) -> int:

@@ -7,7 +7,12 @@
 - :mod:`.rows`: the typed rows of those tables.
 """
 
-from .deformation_comparison import compare_deformations, comparison_csv, comparison_markdown
+from .deformation_comparison import (
+    compare_deformations,
+    comparison_csv,
+    comparison_markdown,
+    write_deformation_comparison,
+)
 from .report import summarize, summary_markdown, terminal_summary, write_report
 from .rows import DeformationComparisonRow, PairedComparison, PairedRow, SummaryRow
 from .statistics import paired_comparison, paired_statistics, tidy_rows
@@ -21,6 +26,7 @@ __all__ = [
     "paired_statistics",
     "tidy_rows",
     "compare_deformations",
+    "write_deformation_comparison",
     "comparison_csv",
     "comparison_markdown",
     "SummaryRow",

@@ -13,14 +13,22 @@ from __future__ import annotations
 
 import csv
 import io
+from pathlib import Path
 
 import numpy as np
 
+from ..files import atomic_write_text
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
 from .rows import DeformationComparisonRow
 from .statistics import paired_comparison
 
-__all__ = ["MEASURES", "compare_deformations", "comparison_markdown", "comparison_csv"]
+__all__ = [
+    "MEASURES",
+    "compare_deformations",
+    "comparison_markdown",
+    "comparison_csv",
+    "write_deformation_comparison",
+]
 
 #: ``(variant, measure)`` compared; ``None`` for the registration measures shared by the variants.
 MEASURES = (
@@ -117,3 +125,32 @@ def comparison_csv(rows: list[DeformationComparisonRow]) -> str:
     for r in rows:
         writer.writerow({k: "" if v is None else v for k, v in r.as_dict().items()})
     return buf.getvalue()
+
+
+def write_deformation_comparison(lddmm: list, svf: list, output) -> tuple[Path, str]:
+    """Compare the two studies' results and write ``comparison.md`` and ``comparison.csv``.
+
+    What ``symladders study --deformation both`` writes next to the two studies.
+
+    Parameters
+    ----------
+    lddmm, svf : list of SubjectResults
+        The two studies' results on the same subjects.
+    output : path
+        The folder (created if needed).
+
+    Returns
+    -------
+    path : Path
+        ``comparison.md``.
+    text : str
+        Its Markdown.
+    """
+    output = Path(output)
+    output.mkdir(parents=True, exist_ok=True)
+    rows = compare_deformations(lddmm, svf)
+    units = [p.unit for r in lddmm for p in r.pairs]
+    text = comparison_markdown(rows, units[0] if units else "mm")
+    atomic_write_text(output / "comparison.csv", comparison_csv(rows))
+    atomic_write_text(output / "comparison.md", text)
+    return output / "comparison.md", text
