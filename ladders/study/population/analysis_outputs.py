@@ -201,7 +201,7 @@ def plot_group_means(c: GroupComparison, path: Path) -> Path:
     means = [np.linalg.norm(c.group_mean(i), axis=1) for i in (0, 1)]
     diff = np.linalg.norm(c.group_mean(0) - c.group_mean(1), axis=1)
     lim = (0.0, float(max(x.max() for x in means)) or 1.0)
-    fig = plt.figure(figsize=(13, 4.4))
+    fig = plt.figure(figsize=(15.6, 3.2))
     subs = fig.subfigures(1, 3)
     for i in (0, 1):
         surf = map_pair(subs[i], m.atlas, m.faces, means[i], "viridis", lim,
@@ -210,7 +210,7 @@ def plot_group_means(c: GroupComparison, path: Path) -> Path:
     surf = map_pair(subs[2], m.atlas, m.faces, diff, "magma", (0.0, float(diff.max()) or 1.0),
                     "|difference of the means|", _VIEWS)  # fmt: skip
     fig.colorbar(surf, ax=subs[2].axes, shrink=0.6, label="mm")
-    fig.suptitle(f"Mean motion per group on the atlas: {m.label} ({m.name})", y=1.02)
+    fig.suptitle(f"Mean motion per group on the atlas: {m.label} ({m.name})", y=1.1)
     return _save(fig, path)
 
 
@@ -227,7 +227,7 @@ def plot_pvalue_map(c: GroupComparison, path: Path, weight=None, alpha: float = 
     if weight is not None:
         panels.append(("planted region (weight)", np.asarray(weight)))
     top = max(float(-np.log10(1.0 / (c.displacement.n_permutations + 1))), 2.0)
-    fig = plt.figure(figsize=(4.4 * len(panels), 4.4))
+    fig = plt.figure(figsize=(5.2 * len(panels), 3.2))
     subs = fig.subfigures(1, len(panels))
     for sub, (title, values) in zip(np.atleast_1d(subs), panels):
         lim = (0.0, 1.0) if title.startswith("planted") else (0.0, top)
@@ -237,7 +237,7 @@ def plot_pvalue_map(c: GroupComparison, path: Path, weight=None, alpha: float = 
     fig.suptitle(
         f"Corrected p-values, {m.label} ({m.name}); significant where −log10 p > "
         f"{-np.log10(alpha):.2f}",
-        y=1.02,
+        y=1.1,
     )
     return _save(fig, path)
 
