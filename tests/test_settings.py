@@ -210,3 +210,50 @@ def test_study_configuration_carries_the_settings_and_their_key():
     d = config.as_dict()
     assert d["registration_key"] == config.registration.key()
     assert d["registration"]["max_iter"] == 30
+
+
+def test_the_settings_are_made_of_parts_that_validate_themselves():
+    from manifolds.lddmm.settings_parts import (
+        PARTS,
+        ControlPointSettings,
+        FlowSettings,
+        KernelSettings,
+        OptimizerSettings,
+        StoppingSettings,
+    )
+
+    flat = {f.name for f in dataclasses.fields(RegistrationSettings)}
+    owned = [f for part in PARTS.values() for f in part.__dataclass_fields__]
+    assert sorted(owned) == sorted(flat)  # every field in exactly one part
+    default = RegistrationSettings(sigma=1.0)
+    for name, part in PARTS.items():
+        got = getattr(default, name)
+        assert isinstance(got, part)
+        for f in part.__dataclass_fields__:
+            field = part.__dataclass_fields__[f]
+            if f != "sigma":  # the default is the part's, written once
+                assert getattr(default, f) == field.default
+            assert getattr(got, f) == getattr(default, f)
+    s = RegistrationSettings.from_parts(
+        KernelSettings(sigma=10.0),
+        ControlPointSettings(control_points="vertices", control_point_spacing=7.0),
+        FlowSettings(integrator="RK4", n_steps=4),
+        OptimizerSettings(max_corrections=20),
+        StoppingSettings(stopping="shape", shape_tol=1e-4),
+    )
+    assert s == RegistrationSettings(
+        sigma=10.0, control_points="vertices", control_point_spacing=7.0, integrator="rk4",
+        n_steps=4, max_corrections=20, stopping="shape", shape_tol=1e-4,
+    )  # fmt: skip
+    assert s.flow_settings == FlowSettings("rk4", 4) and s.stopping_rule().kind == "shape"
+    for bad, match in (
+        (lambda: KernelSettings(sigma=-1.0), "KernelSettings: sigma"),
+        (lambda: ControlPointSettings(control_point_indices=(1, 2)), "control_point_indices"),
+        (lambda: FlowSettings(n_steps=0), "FlowSettings: n_steps"),
+        (lambda: OptimizerSettings(solver="adam"), "OptimizerSettings: solver"),
+        (lambda: StoppingSettings(stopping="never"), "StoppingSettings: stopping"),
+        (lambda: RegistrationSettings(sigma=1.0, max_iter=0), "max_iter"),
+        (lambda: RegistrationSettings.from_parts(FlowSettings()), "expected a KernelSettings"),
+    ):
+        with pytest.raises(ManifoldError, match=match):
+            bad()

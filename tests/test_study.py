@@ -281,8 +281,16 @@ def test_one_job_with_parallel_kernel_sums_gives_the_results_of_two_workers(tmp_
     cohort = make_synthetic_cohort(2, seed=3)
     config = StudyConfig.build(alpha2=(1.0,))
     runs = {
-        jobs: run_study(config, cohort.atlas, cohort.faces, cohort.subjects, tmp_path / str(jobs),
-                        jobs=jobs, progress=False, meshes=False)  # fmt: skip
+        jobs: run_study(
+            config,
+            cohort.atlas,
+            cohort.faces,
+            cohort.subjects,
+            tmp_path / str(jobs),
+            jobs=jobs,
+            progress=False,
+            meshes=False,
+        )  # fmt: skip
         for jobs in (1, 2)
     }
 

@@ -45,6 +45,13 @@ from .registration_cache import RegistrationCache
 from .registration_problem import RegistrationProblem
 from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
+from .settings_parts import (
+    ControlPointSettings,
+    FlowSettings,
+    KernelSettings,
+    OptimizerSettings,
+    StoppingSettings,
+)
 from .space import LDDMMLandmarks
 from .stationary_flow import (
     FlowResult,
@@ -75,6 +82,11 @@ __all__ = [
     "numba_available",
     "RegistrationResult",
     "RegistrationSettings",
+    "KernelSettings",
+    "ControlPointSettings",
+    "FlowSettings",
+    "OptimizerSettings",
+    "StoppingSettings",
     "RegistrationProblem",
     "build_registration_problem",
     "RegistrationCache",

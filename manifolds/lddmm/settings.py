@@ -23,26 +23,24 @@ from typing import Any
 import numpy as np
 
 from ..errors import ManifoldError
-from ..kernels.backends import resolve_backend
-from ..numerics.integrators import INTEGRATORS, Integrator
-from ..numerics.solvers import SOLVERS, SolverOptions, StoppingRule
-from ..validation import check_array, check_float, check_int
+from ..numerics.solvers import SolverOptions, StoppingRule
 from .control_points import farthest_point_indices, policy_spacing, resolve_control_points
 from .kernels import GaussianKernel
+from .settings_parts import (
+    PARTS,
+    STOPPING_RULES,
+    ControlPointSettings,
+    FlowSettings,
+    KernelSettings,
+    OptimizerSettings,
+    StoppingSettings,
+    field_default,
+)
 
 __all__ = ["RegistrationSettings", "STOPPING_RULES", "SETTINGS_SCHEMA"]
 
 #: Version of the settings' serialisation; part of :meth:`RegistrationSettings.key`.
 SETTINGS_SCHEMA = 2
-#: ``"objective"``: the relative decrease of the objective and the largest gradient
-#: entry (``ftol``, ``gtol``); ``"shape"``: the change of the deformed template and
-#: the gradient's predicted change in the shapes' unit (``shape_tol``).
-STOPPING_RULES = ("objective", "shape")
-_POLICIES = ("auto", "dense", "grid", "finegrid", "vertices")
-_BACKENDS = ("auto", "numpy", "numba")
-#: The defaults of the solvers' options and of the stopping rule, written once, there.
-_SOLVER = SolverOptions()
-_RULE = StoppingRule()
 #: Policies whose control points are spaced by ``control_point_spacing`` ("auto" may
 #: choose a grid).
 _SPACED_POLICIES = ("auto", "grid", "finegrid", "vertices")
@@ -56,17 +54,19 @@ def library_version() -> str:
         return "unknown"
 
 
-def _check_choice(value, choices, name: str) -> str:
-    if not isinstance(value, str) or value.lower() not in choices:
-        raise ManifoldError(
-            f"RegistrationSettings: {name}: expected one of {list(choices)}, got {value!r}"
-        )
-    return value.lower()
-
-
 @dataclass(frozen=True)
 class RegistrationSettings:
     """Settings of a registration (paper, eq. 3) of kernel-landmark shapes.
+
+    Made of five parts, each validating its own fields and holding their defaults
+    (:mod:`manifolds.lddmm.settings_parts`): :attr:`kernel_settings` (``sigma``,
+    ``kernel_backend``), :attr:`control_point_settings` (the ``control_point*`` fields,
+    ``optimize_control_points``, ``auto_threshold``, ``max_control_points``),
+    :attr:`flow_settings` (``integrator``, ``n_steps``), :attr:`optimizer_settings`
+    (``solver``, ``precondition``, ``rel_ridge``, ``joint_metric`` and the solver's
+    options) and :attr:`stopping_settings` (``stopping``, the tolerances, ``max_iter``).
+    The flat fields below are those parts' fields; :meth:`from_parts` builds settings
+    from parts.
 
     Attributes
     ----------
@@ -133,100 +133,92 @@ class RegistrationSettings:
     """
 
     sigma: float
-    control_points: Any = "auto"
-    control_point_spacing: float | None = None
-    control_point_indices: tuple | None = None
-    optimize_control_points: bool = False
-    control_point_scale: float | None = None
-    integrator: str | None = None
-    n_steps: int = 10
-    solver: str = "lbfgsb"
-    stopping: str = "objective"
-    shape_tol: float = _RULE.shape_tol
-    ftol: float = _RULE.ftol
-    gtol: float = _RULE.gtol
-    max_iter: int = _RULE.max_iter
-    max_corrections: int = _SOLVER.max_corrections
-    max_line_search: int = _SOLVER.max_line_search
-    max_inner: int = _SOLVER.max_inner
-    joint_metric: bool = True
-    refresh_every: int = _SOLVER.refresh_every
-    precondition: bool = True
-    rel_ridge: float = 1e-2
-    kernel_backend: str = "auto"
-    auto_threshold: int = 1000
-    max_control_points: int = 20_000
-    blas_threads: int | None = _SOLVER.blas_threads
+    control_points: Any = field_default(ControlPointSettings, "control_points")
+    control_point_spacing: float | None = field_default(
+        ControlPointSettings, "control_point_spacing"
+    )
+    control_point_indices: tuple | None = field_default(
+        ControlPointSettings, "control_point_indices"
+    )
+    optimize_control_points: bool = field_default(ControlPointSettings, "optimize_control_points")
+    control_point_scale: float | None = field_default(ControlPointSettings, "control_point_scale")
+    integrator: str | None = field_default(FlowSettings, "integrator")
+    n_steps: int = field_default(FlowSettings, "n_steps")
+    solver: str = field_default(OptimizerSettings, "solver")
+    stopping: str = field_default(StoppingSettings, "stopping")
+    shape_tol: float = field_default(StoppingSettings, "shape_tol")
+    ftol: float = field_default(StoppingSettings, "ftol")
+    gtol: float = field_default(StoppingSettings, "gtol")
+    max_iter: int = field_default(StoppingSettings, "max_iter")
+    max_corrections: int = field_default(OptimizerSettings, "max_corrections")
+    max_line_search: int = field_default(OptimizerSettings, "max_line_search")
+    max_inner: int = field_default(OptimizerSettings, "max_inner")
+    joint_metric: bool = field_default(OptimizerSettings, "joint_metric")
+    refresh_every: int = field_default(OptimizerSettings, "refresh_every")
+    precondition: bool = field_default(OptimizerSettings, "precondition")
+    rel_ridge: float = field_default(OptimizerSettings, "rel_ridge")
+    kernel_backend: str = field_default(KernelSettings, "kernel_backend")
+    auto_threshold: int = field_default(ControlPointSettings, "auto_threshold")
+    max_control_points: int = field_default(ControlPointSettings, "max_control_points")
+    blas_threads: int | None = field_default(OptimizerSettings, "blas_threads")
 
     def __post_init__(self):
-        name = "RegistrationSettings"
-        put = object.__setattr__
-        put(self, "sigma", check_float(self.sigma, f"{name}: sigma", minimum=0.0, strict=True))
-        put(self, "control_points", self._check_policy(self.control_points))
-        for flag in ("optimize_control_points", "precondition", "joint_metric"):
-            value = getattr(self, flag)
-            if not isinstance(value, bool | np.bool_):
-                raise ManifoldError(f"{name}: {flag}: expected True or False, got {value!r}")
-            put(self, flag, bool(value))
-        for key in ("control_point_spacing", "control_point_scale"):  # optional, > 0
-            if getattr(self, key) is not None:
-                put(self, key, check_float(getattr(self, key), f"{name}: {key}", 0.0, strict=True))
-        if self.control_point_indices is not None:
-            put(self, "control_point_indices", self._check_indices(self.control_point_indices))
-        if self.integrator is not None:
-            integ = self.integrator
-            if isinstance(integ, Integrator):
-                integ = integ.name
-            put(self, "integrator", _check_choice(integ, tuple(INTEGRATORS), "integrator"))
-        put(self, "solver", _check_choice(self.solver, tuple(SOLVERS), "solver"))
-        put(self, "stopping", _check_choice(self.stopping, STOPPING_RULES, "stopping"))
-        put(self, "kernel_backend", _check_choice(self.kernel_backend, _BACKENDS, "kernel_backend"))
-        for key in ("n_steps", "max_iter", "max_corrections", "max_line_search", "max_inner"):
-            put(self, key, check_int(getattr(self, key), f"{name}: {key}", minimum=1))
-        for key in ("auto_threshold", "refresh_every"):
-            put(self, key, check_int(getattr(self, key), f"{name}: {key}", minimum=0))
-        put(
-            self,
-            "max_control_points",
-            check_int(self.max_control_points, f"{name}: max_control_points", minimum=1),
-        )
-        for key in ("shape_tol", "ftol", "gtol", "rel_ridge"):
-            put(self, key, check_float(getattr(self, key), f"{name}: {key}", minimum=0.0))
-        if self.blas_threads is not None:
-            put(self, "blas_threads", check_int(self.blas_threads, f"{name}: blas_threads", 1))
+        # each part validates its own fields; their normalised values are kept
+        for part in PARTS.values():
+            built = part(**{f: getattr(self, f) for f in part.__dataclass_fields__})
+            for f in part.__dataclass_fields__:
+                object.__setattr__(self, f, getattr(built, f))
 
-    @staticmethod
-    def _check_policy(policy):
-        if isinstance(policy, str):
-            return _check_choice(policy, _POLICIES, "control_points")
-        arr = check_array(policy, (), "RegistrationSettings: control_points")
-        if arr.ndim != 2 or arr.shape[1] not in (2, 3) or arr.shape[0] < 1:
-            raise ManifoldError(
-                "RegistrationSettings: control_points: expected a policy name among "
-                f"{list(_POLICIES)} or an array of shape (n_cp, 2 or 3), got shape {arr.shape}"
-            )
-        return tuple(tuple(float(v) for v in row) for row in arr)
+    # ------------------------------------------------------------ parts
+    @property
+    def kernel_settings(self) -> KernelSettings:
+        """The kernel: ``sigma`` and the backend."""
+        return self._part(KernelSettings)
 
-    def _check_indices(self, indices) -> tuple:
-        field_name = "RegistrationSettings: control_point_indices"
-        if self.control_points != "vertices":
-            raise ManifoldError(
-                f"{field_name}: given with the control-point policy "
-                f"{self.control_points if isinstance(self.control_points, str) else 'array'!r}; "
-                "vertex indices belong to the 'vertices' policy"
-            )
-        arr = np.asarray(indices)
-        if arr.ndim != 1 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
-            raise ManifoldError(
-                f"{field_name}: expected a non-empty sequence of integers, got "
-                f"{arr.dtype} array of shape {arr.shape}"
-            )
-        if arr.min() < 0 or np.unique(arr).size != arr.size:
-            raise ManifoldError(
-                f"{field_name}: expected distinct non-negative vertex indices, got "
-                f"min {int(arr.min())} and {arr.size - np.unique(arr).size} repeated"
-            )
-        return tuple(int(i) for i in arr)
+    @property
+    def control_point_settings(self) -> ControlPointSettings:
+        """The control points: policy, spacing, indices, optimisation, limits."""
+        return self._part(ControlPointSettings)
+
+    @property
+    def flow_settings(self) -> FlowSettings:
+        """The flow's time integration: integrator and steps."""
+        return self._part(FlowSettings)
+
+    @property
+    def optimizer_settings(self) -> OptimizerSettings:
+        """The solver, its variables and its options."""
+        return self._part(OptimizerSettings)
+
+    @property
+    def stopping_settings(self) -> StoppingSettings:
+        """The stopping rule and the iteration limit."""
+        return self._part(StoppingSettings)
+
+    def _part(self, part: type):
+        return part(**{f: getattr(self, f) for f in part.__dataclass_fields__})
+
+    @classmethod
+    def from_parts(
+        cls,
+        kernel: KernelSettings,
+        control_points: ControlPointSettings | None = None,
+        flow: FlowSettings | None = None,
+        optimizer: OptimizerSettings | None = None,
+        stopping: StoppingSettings | None = None,
+    ) -> RegistrationSettings:
+        """Settings made of their parts (a part left out takes its defaults)."""
+        parts = (kernel, control_points or ControlPointSettings(), flow or FlowSettings(),
+                 optimizer or OptimizerSettings(), stopping or StoppingSettings())  # fmt: skip
+        fields = {}
+        for part, expected in zip(parts, PARTS.values()):
+            if not isinstance(part, expected):
+                raise ManifoldError(
+                    f"RegistrationSettings.from_parts: expected a {expected.__name__}, got "
+                    f"{type(part).__name__}"
+                )
+            fields.update(dataclasses.asdict(part))
+        return cls(**fields)
 
     # ------------------------------------------------------------ derived
     @property
@@ -269,7 +261,7 @@ class RegistrationSettings:
 
     def resolved_backend(self) -> str:
         """The kernel backend that runs: ``"auto"`` resolved on this machine."""
-        return resolve_backend(self.kernel_backend, "RegistrationSettings: kernel_backend")
+        return self.kernel_settings.resolved_backend()
 
     def make_kernel(self, block_size: int | None = None):
         """The :class:`~manifolds.lddmm.GaussianKernel` of these settings."""
@@ -307,11 +299,11 @@ class RegistrationSettings:
 
     def solver_options(self) -> SolverOptions:
         """The options the solver takes (:class:`~manifolds.numerics.solvers.SolverOptions`)."""
-        return SolverOptions(**{f: getattr(self, f) for f in SolverOptions.__dataclass_fields__})
+        return self.optimizer_settings.solver_options()
 
     def stopping_rule(self) -> StoppingRule:
         """The stopping rule of these settings (a new one: a rule records its run)."""
-        return StoppingRule(self.stopping, self.ftol, self.gtol, self.shape_tol, self.max_iter)
+        return self.stopping_settings.rule()
 
     def in_effect(self) -> tuple[str, ...]:
         """The fields that change a registration's result under these settings.
