@@ -28,6 +28,7 @@ from pathlib import Path
 import nibabel as nib
 import numpy as np
 
+from ..batch import run_batch
 from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
@@ -214,9 +215,6 @@ def mesh_label_images(
     -------
     MeshingOutcome
     """
-    from joblib import Parallel, delayed
-    from tqdm.auto import tqdm
-
     settings = settings or MeshingSettings()
     ext = "." + ext.lower().lstrip(".")
     if ext not in WRITE_EXTENSIONS:
@@ -227,18 +225,14 @@ def mesh_label_images(
         raise ImageError(f"{bad[0]}: not a NIfTI label image (.nii or .nii.gz)")
     folder = Path(output)
     folder.mkdir(parents=True, exist_ok=True)
-    tasks = plan_meshing(images, frames, ext)
-    run = Parallel(n_jobs=jobs, return_as="generator")
-    bar = tqdm(total=len(tasks), desc="images", unit="mesh", disable=not progress)
+    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes))
+             for t in plan_meshing(images, frames, ext)]  # fmt: skip
     records = []
     try:
-        jobs_ = (delayed(_mesh_one)(t, int(label), folder, _settings_for(t, settings, cut_planes))
-                 for t in tasks)  # fmt: skip
-        for record in run(jobs_):
+        for record in run_batch(_mesh_one, tasks, jobs=jobs, progress=bool(progress),
+                                desc="images", unit="mesh"):  # fmt: skip
             records.append(record)
-            bar.update(1)
     finally:
-        bar.close()
         with atomic_path(folder / REPORT_FILE) as tmp:
             tmp.write_text(_report_csv(records), encoding="utf-8")
     return MeshingOutcome(folder, records)

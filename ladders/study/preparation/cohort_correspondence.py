@@ -30,10 +30,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from joblib import Parallel, delayed
 
-from manifolds.kernels import kernel_threads, threads_per_worker
-
+from ..batch import run_batch
 from ..cohort.mesh_folder import natural_key, scan_mesh_folder
 from ..files import array_digest, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
@@ -125,20 +123,14 @@ def _run(tasks, records, outcome, jobs, progress, total):
     if progress is not None:
         for i, name in enumerate(outcome.reused):
             progress(i + 1, total, name, records[name])
-    for record in Parallel(n_jobs=jobs, return_as="generator")(tasks):
+    for record in run_batch(_correspond_one, tasks, jobs=jobs):
         outcome.computed.append(record["subject"])
         if progress is not None:
             progress(len(outcome.reused) + len(outcome.computed), total, record["subject"], record)
         yield record
 
 
-def _subject(name, slot, *, threads=None, **kwargs) -> dict:
-    """Correspond one subject with the kernel sums on ``threads`` threads (a worker's share)."""
-    with kernel_threads(threads):
-        return _correspond_one(name, slot, **kwargs)
-
-
-def _correspond_one(name, slot, *, atlas, settings, factor, output, ext, fingerprint) -> dict:
+def _correspond_one(name, slot, atlas, settings, factor, output, ext, fingerprint) -> dict:
     """Correspond one subject; the record (status ok or failed) is written last."""
     record = {"subject": name, "fingerprint": fingerprint, "unit_factor": factor}
     try:
@@ -247,8 +239,7 @@ def correspond_cohort(
     write_mesh(output / f"atlas{ext}", *atlas_mesh, atomic=True)
     outcome = CohortCorrespondence(output, units=report.assumed_units)
     atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
-    jobs_args = dict(atlas=atlas_mesh, settings=settings, output=output, ext=ext,
-                     threads=threads_per_worker(jobs))  # fmt: skip
+
     factors = {n: report.factors.get(n, 1.0) for n in entries}
     records, pending = {}, []
     for name, slot in entries.items():
@@ -258,8 +249,7 @@ def correspond_cohort(
             records[name] = done
             outcome.reused.append(name)
         else:
-            pending.append(delayed(_subject)(name, slot, factor=factors[name], fingerprint=fp,
-                                             **jobs_args))  # fmt: skip
+            pending.append((name, slot, atlas_mesh, settings, factors[name], output, ext, fp))
     for record in _run(pending, records, outcome, jobs, progress, len(entries)):
         records[record["subject"]] = record
     outcome.records = [records[n] for n in entries]

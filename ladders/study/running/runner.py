@@ -11,9 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from manifolds.kernels import kernel_threads, threads_per_worker
-from manifolds.numerics.solvers import limit_blas_threads
-
+from ..batch import run_batch
 from ..cohort import Subject
 from ..errors import CohortError
 from ..files import array_digest, atomic_write_text, config_hash
@@ -101,18 +99,9 @@ def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> PairResult |
     return FailedPair(subject.name, alpha2, error, trace, time.perf_counter() - start)
 
 
-def _subject_task(
-    config, atlas, faces, subject, alphas, store, config_id, meshes=None, threads=None
-) -> dict:
-    """Worker: compute the subject's pairs it can claim; each is stored as it finishes.
-
-    ``threads``: the kernel sums' threads in this worker (:func:`threads_per_worker`).
-    BLAS runs on one thread whatever ``jobs`` (its small products gain nothing from more,
-    and a threaded BLAS sums in another order): a pair's numbers do not depend on the
-    number of workers.
-    """
-    with kernel_threads(threads), limit_blas_threads(1):
-        return _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes)
+def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshes=None) -> dict:
+    """Worker: compute the subject's pairs it can claim; each is stored as it finishes."""
+    return _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes)
 
 
 def _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes) -> dict:
@@ -135,21 +124,8 @@ def _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, mesh
 
 
 def _run_parallel(tasks, jobs: int, progress: bool) -> list[dict]:
-    from joblib import Parallel, delayed
-    from tqdm.auto import tqdm
-
-    reports = []
-    if not tasks:
-        return reports
-    runner = Parallel(n_jobs=jobs, return_as="generator_unordered")
-    bar = tqdm(total=len(tasks), desc="subjects", disable=not progress, unit="subject")
-    try:
-        for rep in runner(delayed(_subject_task)(*t) for t in tasks):
-            reports.append(rep)
-            bar.update(1)
-    finally:
-        bar.close()
-    return reports
+    return list(run_batch(_subject_task, tasks, jobs=jobs, progress=progress, desc="subjects",
+                          unit="subject", ordered=False))  # fmt: skip
 
 
 def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id, meshes) -> list:
@@ -167,7 +143,8 @@ def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id, 
             if store.load(name, a2, _pair_hash(config_id, subject, a2)) is not None:
                 continue
             if store.claim_is_stale(name, a2):
-                rep = _subject_task(config, atlas, faces, subject, [a2], store, config_id, meshes)
+                task = (config, atlas, faces, subject, [a2], store, config_id, meshes)
+                rep = list(run_batch(_subject_task, [task]))[0]
                 taken_over += [(name, a) for a in rep["computed"]]
                 left += [(name, a) for a in rep["busy"]]
             else:
@@ -272,9 +249,8 @@ def run_study(
     alphas = [float(a) for a in config.alpha2]
     by_name = {s.name: s for s in subjects}
     mesh_folder = output / "meshes" / config_id if meshes else None
-    threads = threads_per_worker(jobs)
     tasks = [
-        (config, atlas, faces, s, todo, store, config_id, mesh_folder, threads)
+        (config, atlas, faces, s, todo, store, config_id, mesh_folder)
         for s, todo in _pending(subjects, alphas, store, config_id)
     ]
     recomputed = dict(store.unusable)

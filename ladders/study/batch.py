@@ -1,0 +1,74 @@
+"""One runner for the application's batches: a study's subjects, a correspondence's
+subjects, a meshing's images.
+
+Each step decides what is already done (the study's result store, the
+correspondence's records, the meshing's provenance files) and hands the rest to
+:func:`run_batch`, which runs ``work(*task)`` for every task, in ``jobs`` processes
+(joblib) or in this one, and yields each result as it finishes, so that the caller
+stores it at once: an interruption keeps every finished item, and a rerun resumes. The
+work functions record their own failures (a failing item returns a record saying why
+and never stops the others). Threads: a lone run lets the compiled kernel sums use
+every core; several workers share the cores
+(:func:`~manifolds.kernels.threads_per_worker`), and BLAS runs on one thread in every
+case, so that an item's numbers do not depend on ``jobs``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
+
+from manifolds.kernels import kernel_threads, threads_per_worker
+from manifolds.numerics.solvers import limit_blas_threads
+
+__all__ = ["run_batch"]
+
+
+def _call(work: Callable, threads: int | None, task: tuple):
+    with kernel_threads(threads), limit_blas_threads(1):
+        return work(*task)
+
+
+def run_batch(
+    work: Callable,
+    tasks: Iterable[tuple],
+    *,
+    jobs: int = 1,
+    progress: bool | Callable = False,
+    desc: str = "items",
+    unit: str = "item",
+    ordered: bool = True,
+) -> Iterator:
+    """Run ``work(*task)`` for every task; yield each result as it finishes.
+
+    Parameters
+    ----------
+    work : callable
+        A module-level function (it is sent to the worker processes).
+    tasks : iterable of tuple
+        Its arguments, one tuple per item.
+    jobs : int
+        Worker processes (joblib; ``-1``: one per core; 1: this process).
+    progress : bool or callable
+        True: a progress bar (tqdm) over the items; a callable: called with each result.
+    desc, unit : str
+        The progress bar's label and unit.
+    ordered : bool
+        Yield in the tasks' order (else as they finish).
+    """
+    from joblib import Parallel, delayed
+    from tqdm.auto import tqdm
+
+    tasks = list(tasks)
+    if not tasks:
+        return
+    threads = threads_per_worker(jobs)
+    runner = Parallel(n_jobs=jobs, return_as="generator" if ordered else "generator_unordered")
+    bar = tqdm(total=len(tasks), desc=desc, unit=unit, disable=progress is not True)
+    try:
+        for result in runner(delayed(_call)(work, threads, task) for task in tasks):
+            bar.update(1)
+            if callable(progress):
+                progress(result)
+            yield result
+    finally:
+        bar.close()

@@ -1,0 +1,32 @@
+"""The one batch runner of the study, the correspondence and the meshing."""
+
+import os
+
+import numba
+import threadpoolctl
+
+from ladders.study.batch import run_batch
+
+
+def threads_seen(i):
+    blas = [p["num_threads"] for p in threadpoolctl.threadpool_info() if p["user_api"] == "blas"]
+    return i, numba.get_num_threads(), max(blas, default=1)
+
+
+def test_results_come_in_order_with_the_threads_of_a_lone_run_or_of_a_worker():
+    lone = list(run_batch(threads_seen, [(i,) for i in range(3)], jobs=1))
+    assert [r[0] for r in lone] == [0, 1, 2]
+    assert all(r[1] == numba.config.NUMBA_NUM_THREADS and r[2] == 1 for r in lone)
+    cores = os.cpu_count() or 1
+    workers = list(run_batch(threads_seen, [(i,) for i in range(4)], jobs=2))
+    assert [r[0] for r in workers] == [0, 1, 2, 3]
+    assert all(r[1] == max(1, cores // 2) and r[2] == 1 for r in workers)
+    assert sorted(r[0] for r in run_batch(threads_seen, [(i,) for i in range(4)], jobs=2,
+                                          ordered=False)) == [0, 1, 2, 3]  # fmt: skip
+
+
+def test_progress_callback_sees_every_result_and_an_empty_batch_yields_nothing():
+    seen = []
+    out = list(run_batch(threads_seen, [(5,), (6,)], progress=seen.append))
+    assert seen == out
+    assert list(run_batch(threads_seen, [])) == []
