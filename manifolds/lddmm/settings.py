@@ -14,6 +14,7 @@ in the last bits): the study keys its caches and result folders with it.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 from dataclasses import dataclass
@@ -46,6 +47,7 @@ SETTINGS_SCHEMA = 2
 _SPACED_POLICIES = ("auto", "grid", "finegrid", "vertices")
 
 
+@functools.cache
 def library_version() -> str:
     """The installed version of the library (part of :meth:`RegistrationSettings.key`)."""
     try:

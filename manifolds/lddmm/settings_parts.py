@@ -186,11 +186,8 @@ class OptimizerSettings(_Part):
         for flag in ("precondition", "joint_metric"):
             self._put(flag, _flag(owner, getattr(self, flag), flag))
         self._put("rel_ridge", check_float(self.rel_ridge, f"{owner}: rel_ridge", 0.0))
-        for key in ("max_corrections", "max_line_search", "max_inner"):
-            self._put(key, check_int(getattr(self, key), f"{owner}: {key}", 1))
-        self._put("refresh_every", check_int(self.refresh_every, f"{owner}: refresh_every", 0))
-        if self.blas_threads is not None:
-            self._put("blas_threads", check_int(self.blas_threads, f"{owner}: blas_threads", 1))
+        for key, value in dataclasses.asdict(self.solver_options()).items():  # validated there
+            self._put(key, value)
 
     def solver_options(self) -> SolverOptions:
         """The options the solver takes."""

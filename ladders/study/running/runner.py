@@ -101,10 +101,6 @@ def _attempt(config, atlas, faces, subject, alpha2, meshes=None) -> PairResult |
 
 def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshes=None) -> dict:
     """Worker: compute the subject's pairs it can claim; each is stored as it finishes."""
-    return _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes)
-
-
-def _subject_pairs(config, atlas, faces, subject, alphas, store, config_id, meshes) -> dict:
     report = {"subject": subject.name, "computed": [], "busy": []}
     for a2 in alphas:
         if not store.claim(subject.name, a2):

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ...validation import check_int
+
 __all__ = ["SolverOptions"]
 
 #: Fields each solver reads (``refresh_every`` only on problems whose metric is refreshed).
@@ -20,10 +22,9 @@ _READS = {
 }
 
 
-def _positive_int(value, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or int(value) != value or int(value) < minimum:
-        raise ValueError(f"SolverOptions: {name}: expected an integer >= {minimum}, got {value!r}")
-    return int(value)
+#: The smallest value of each field.
+_MINIMA = {"max_corrections": 1, "max_line_search": 1, "max_inner": 1, "refresh_every": 0,
+           "blas_threads": 1}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -53,11 +54,10 @@ class SolverOptions:
 
     def __post_init__(self):
         put = object.__setattr__
-        for name in ("max_corrections", "max_line_search", "max_inner"):
-            put(self, name, _positive_int(getattr(self, name), name, 1))
-        put(self, "refresh_every", _positive_int(self.refresh_every, "refresh_every", 0))
-        if self.blas_threads is not None:
-            put(self, "blas_threads", _positive_int(self.blas_threads, "blas_threads", 1))
+        for name, minimum in _MINIMA.items():
+            value = getattr(self, name)
+            if value is not None or name != "blas_threads":  # blas_threads may be None
+                put(self, name, check_int(value, f"SolverOptions: {name}", minimum))
 
     @staticmethod
     def in_effect(solver: str) -> tuple[str, ...]:
