@@ -60,7 +60,7 @@ def _rms(diff) -> float:
 def _solve(template, target, alpha, settings):
     """Run the settings' solver; return the problem, the result and (FE, deformed) per iteration."""
     from manifolds.lddmm import build_registration_problem
-    from manifolds.lddmm.flow_models import HamiltonianFlow
+    from manifolds.lddmm.hamiltonian_shooting import HamiltonianFlow
     from manifolds.numerics.solvers import StoppingRule, get_solver
 
     problem, x0 = build_registration_problem(HamiltonianFlow, template, target, alpha, settings)

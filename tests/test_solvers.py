@@ -16,8 +16,9 @@ from manifolds.lddmm import (
     register,
 )
 from manifolds.lddmm.control_points import resolve_control_points
-from manifolds.lddmm.flow_models import HamiltonianFlow, StationaryKernelFlow
+from manifolds.lddmm.hamiltonian_shooting import HamiltonianFlow
 from manifolds.lddmm.joint_preconditioner import JointPreconditioner
+from manifolds.lddmm.stationary_flow import StationaryKernelFlow
 from manifolds.numerics.solvers import SOLVERS, StoppingRule, krylov_lower_bound, steihaug_cg
 
 SIGMA = 0.6

@@ -7,11 +7,10 @@ from autograd import grad
 
 from manifolds.errors import ConvergenceWarning
 from manifolds.lddmm.control_points import grid_control_points
-from manifolds.lddmm.flow_models import StationaryKernelFlow
 from manifolds.lddmm.kernels import GaussianKernel, numba_available
 from manifolds.lddmm.registration import register, registration_objective
 from manifolds.lddmm.settings import RegistrationSettings
-from manifolds.lddmm.stationary_flow import kernel_flow
+from manifolds.lddmm.stationary_flow import StationaryKernelFlow, kernel_flow
 from manifolds.lddmm.svf_registration import register_svf, svf_objective
 from manifolds.numerics.integrators import RK2, RK4, Euler
 from tests.test_svf_flow import ag_flow

@@ -32,8 +32,16 @@ from .control_points import (
     resolve_control_points,
     vertex_control_points,
 )
-from .flow_models import FlowModel, HamiltonianFlow, StationaryKernelFlow
-from .hamiltonian_shooting import ShootingResult, hamiltonian, shoot, shooting_jvp, shooting_vjp
+from .flow_models import FlowModel
+from .hamiltonian_shooting import (
+    HamiltonianFlow,
+    ShootingResult,
+    hamiltonian,
+    shoot,
+    shooting_jvp,
+    shooting_vjp,
+)
+from .hamiltonian_system import CompiledHamiltonianSystem, HamiltonianSystem, hamiltonian_system
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import (
@@ -56,6 +64,7 @@ from .space import LDDMMLandmarks
 from .stationary_flow import (
     FlowResult,
     StationaryFlow,
+    StationaryKernelFlow,
     integrate_stationary,
     kernel_flow,
     kernel_flow_jvp,
@@ -96,6 +105,9 @@ __all__ = [
     "HamiltonianFlow",
     "StationaryKernelFlow",
     "ShootingResult",
+    "HamiltonianSystem",
+    "CompiledHamiltonianSystem",
+    "hamiltonian_system",
     "hamiltonian",
     "shoot",
     "shooting_vjp",

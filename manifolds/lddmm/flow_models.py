@@ -5,10 +5,11 @@ nothing else: the deformed template for given control points and momenta (the
 forward pass), the gradient of ``<cot, phi_1(T)>`` with respect to them (the
 adjoint pass), the tangent of ``phi_1(T)`` along a perturbation of them (the
 tangent-linear pass), and the regulariser ``||v||_H^2 = mu^T K(c, c) mu`` with its
-derivatives. :class:`HamiltonianFlow` is LDDMM's geodesic shooting
-(:mod:`manifolds.lddmm.hamiltonian_shooting`); :class:`StationaryKernelFlow` the flow
-of a stationary kernel field (:mod:`manifolds.lddmm.stationary_flow`). Solvers
-count passes through the flow, each about the cost of one forward shooting.
+derivatives. The models live with their flows:
+:class:`~manifolds.lddmm.hamiltonian_shooting.HamiltonianFlow` is LDDMM's geodesic
+shooting, :class:`~manifolds.lddmm.stationary_flow.StationaryKernelFlow` the flow of a
+stationary kernel field. Solvers count passes through the flow, each about the cost
+of one forward shooting.
 """
 
 from __future__ import annotations
@@ -19,15 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..numerics.integrators import get_integrator
-from .hamiltonian_shooting import shoot, shooting_jvp, shooting_vjp
+from ..validation import check_int
 from .kernels import GaussianKernel
-from .stationary_flow import kernel_flow, kernel_flow_jvp, kernel_flow_vjp
 
 __all__ = [
     "FlowPass",
     "FlowModel",
-    "HamiltonianFlow",
-    "StationaryKernelFlow",
     "rkhs_norm_sq",
     "rkhs_norm_sq_gradient",
     "rkhs_norm_sq_hvp",
@@ -101,7 +99,7 @@ class FlowModel(ABC):
     def __init__(self, kernel: GaussianKernel, integrator, n_steps: int):
         self.kernel = kernel
         self.integrator = get_integrator(integrator)
-        self.n_steps = int(n_steps)
+        self.n_steps = check_int(n_steps, f"{self.label}: n_steps", minimum=1)
 
     @abstractmethod
     def forward(self, template, control_points, momenta, keep_stages=False, dense=False):
@@ -118,86 +116,3 @@ class FlowModel(ABC):
     @abstractmethod
     def tangent(self, flow_pass: FlowPass, d_c, d_mu):
         """Tangent of ``phi_1(T)`` along ``(d_c, d_mu)`` (needs ``keep_stages``)."""
-
-
-class HamiltonianFlow(FlowModel):
-    """LDDMM: geodesic shooting of control points and momenta (eq. 2), points carried along."""
-
-    label = "LDDMM"
-    moves_control_points = True
-
-    def forward(self, template, control_points, momenta, keep_stages=False, dense=False):
-        res = shoot(
-            self.kernel,
-            control_points,
-            momenta,
-            self.integrator,
-            self.n_steps,
-            points=None if dense else template,
-            keep_stages=keep_stages,
-        )
-        velocity = res.initial_velocity
-        return FlowPass(
-            deformed=res.control_points if dense else res.points,
-            control_points=control_points,
-            momenta=momenta,
-            norm_sq=float((momenta * velocity).sum()),
-            velocity=velocity,
-            state=(res, dense),
-        )
-
-    def adjoint(self, flow_pass, cot):
-        res, dense = flow_pass.state
-        if dense:
-            g_c, g_mu, _ = shooting_vjp(self.kernel, res, cot_control_points=cot)
-        else:
-            g_c, g_mu, _ = shooting_vjp(self.kernel, res, cot_points=cot)
-        return g_c, g_mu
-
-    def tangent(self, flow_pass, d_c, d_mu):
-        res, dense = flow_pass.state
-        t_c, _, t_x = shooting_jvp(self.kernel, res, d_c, d_mu)
-        return t_c if dense else t_x
-
-
-class StationaryKernelFlow(FlowModel):
-    """SVF: the flow of the stationary field ``v(x) = sum_j K(x, c_j) m_j`` (c, m fixed in time)."""
-
-    label = "SVF"
-    default_integrator = "rk4"
-
-    def forward(self, template, control_points, momenta, keep_stages=False, dense=False):
-        res = kernel_flow(
-            self.kernel,
-            control_points,
-            momenta,
-            template,
-            self.integrator,
-            self.n_steps,
-            keep_stages=keep_stages,
-        )
-        velocity = self.kernel.convolve(control_points, control_points, momenta)
-        return FlowPass(
-            deformed=res.points,
-            control_points=control_points,
-            momenta=momenta,
-            norm_sq=float((momenta * velocity).sum()),
-            velocity=velocity,
-            state=res,
-        )
-
-    def adjoint(self, flow_pass, cot):
-        _, g_m, g_c = kernel_flow_vjp(
-            self.kernel, flow_pass.control_points, flow_pass.momenta, flow_pass.state, cot
-        )
-        return g_c, g_m
-
-    def tangent(self, flow_pass, d_c, d_mu):
-        return kernel_flow_jvp(
-            self.kernel,
-            flow_pass.control_points,
-            flow_pass.momenta,
-            flow_pass.state,
-            d_momenta=d_mu,
-            d_control_points=d_c,
-        )

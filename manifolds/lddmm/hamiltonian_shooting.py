@@ -8,10 +8,17 @@ Gaussian kernel ``K(x, y) = exp(-|x - y|^2 / sigma^2)`` read::
 
 and any set of points follows the same velocity field, ``dx/dt = sum_j K(x, c_j) mu_j``.
 The three are integrated together as one ODE on the state ``(c, mu[, x])``
-with a Runge-Kutta scheme of :mod:`manifolds.numerics.integrators`, so that
-points and control points see the same (stage) velocity fields and the flow of
-the control points equals their shooting. :func:`shooting_vjp` is the exact
-adjoint of this discrete forward pass.
+(:mod:`manifolds.lddmm.hamiltonian_system`, in the kernel backend's layout) with a
+Runge-Kutta scheme of :mod:`manifolds.numerics.integrators`, so that points and
+control points see the same (stage) velocity fields and the flow of the control
+points equals their shooting.
+
+:class:`HamiltonianFlow` is LDDMM's deformation model: its :meth:`~HamiltonianFlow.forward`
+pass is the shooting, its :meth:`~HamiltonianFlow.adjoint` the exact adjoint of this
+discrete forward pass and its :meth:`~HamiltonianFlow.tangent` the exact tangent-linear
+pass; each converts to the system's layout once, calls the integrator, and converts
+back once. :func:`shoot`, :func:`shooting_vjp` and :func:`shooting_jvp` are the same
+passes for a kernel, with every cotangent and tangent of the state.
 """
 
 from __future__ import annotations
@@ -20,13 +27,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..numerics.integrators import Integrator, get_integrator
+from ..numerics.integrators import Integrator
+from .flow_models import FlowModel, FlowPass
+from .hamiltonian_system import HamiltonianSystem, hamiltonian_system
 from .kernels import GaussianKernel
 
 __all__ = [
+    "HamiltonianFlow",
     "ShootingResult",
     "hamiltonian",
-    "hamiltonian_system",
     "shoot",
     "shooting_vjp",
     "shooting_jvp",
@@ -38,44 +47,9 @@ def hamiltonian(kernel: GaussianKernel, control_points, momenta) -> float:
     return 0.5 * kernel.rkhs_inner(control_points, momenta, momenta)
 
 
-def hamiltonian_system(kernel: GaussianKernel):
-    """Right-hand side and its derivatives for the state ``(c, mu[, x])``.
-
-    Returns
-    -------
-    rhs : callable ``state -> dstate``
-    rhs_vjp : callable ``(state, cotangent) -> gradient`` (same tuple layout)
-    rhs_jvp : callable ``(state, tangent) -> tangent of dstate`` (same tuple layout)
-    """
-
-    def rhs(state):
-        c, mu = state[0], state[1]
-        dc, dmu = kernel.hamiltonian_rhs(c, mu)
-        if len(state) == 2:
-            return dc, dmu
-        return dc, dmu, kernel.convolve(state[2], c, mu)
-
-    def rhs_vjp(state, cot):
-        c, mu = state[0], state[1]
-        g_c, g_mu = kernel.hamiltonian_vjp(c, mu, cot[0], cot[1])
-        if len(state) == 2:
-            return g_c, g_mu
-        g_x, g_c2, g_mu2 = kernel.convolve_vjp(state[2], c, mu, cot[2])
-        return g_c + g_c2, g_mu + g_mu2, g_x
-
-    def rhs_jvp(state, tan):
-        c, mu = state[0], state[1]
-        d_dc, d_dmu = kernel.hamiltonian_jvp(c, mu, tan[0], tan[1])
-        if len(state) == 2:
-            return d_dc, d_dmu
-        return d_dc, d_dmu, kernel.convolve_jvp(state[2], c, mu, tan[2], tan[0], tan[1])
-
-    return rhs, rhs_vjp, rhs_jvp
-
-
 @dataclass
 class ShootingResult:
-    """Output of :func:`shoot`.
+    """Output of :func:`shoot` (and the record of a :meth:`HamiltonianFlow.forward` pass).
 
     Attributes
     ----------
@@ -86,11 +60,13 @@ class ShootingResult:
     trajectory : list of tuples, or None
         The ``n_steps + 1`` states ``(c, mu[, x])`` at the step boundaries.
     stages : list, or None
-        Stage states of every step, kept for :func:`shooting_vjp`.
+        Stage states of every step, in ``system``'s layout, kept for :func:`shooting_vjp`.
     integrator : Integrator
     n_steps : int
     initial_velocity : array, shape ``(n_cp, d)``
         ``v_0(c_j) = sum_i K(c_j, c_i) mu_i`` at ``t = 0`` (so ``<mu, K mu> = sum mu . v``).
+    system : HamiltonianSystem, or None
+        The system that integrated (the layout of ``stages``).
     """
 
     control_points: np.ndarray
@@ -101,6 +77,109 @@ class ShootingResult:
     integrator: Integrator | None = None
     n_steps: int = 10
     initial_velocity: np.ndarray | None = field(default=None, repr=False)
+    system: HamiltonianSystem | None = field(default=None, repr=False)
+
+
+def _in_layout(result: ShootingResult, c, mu, x) -> tuple:
+    """A (co)tangent ``(c, mu[, x])`` of the shot's state in its system's layout (zeros for None)."""
+    parts = [(c, result.control_points), (mu, result.momenta)]
+    if result.points is not None:
+        parts.append((x, result.points))
+    return result.system.to_layout(
+        *(np.zeros_like(ref) if v is None else np.asarray(v, dtype=float) for v, ref in parts)
+    )
+
+
+def _from_layout(result: ShootingResult, state: tuple) -> tuple:
+    d = result.control_points.shape[1]
+    return tuple(result.system.from_layout(a, d) for a in state)
+
+
+class HamiltonianFlow(FlowModel):
+    """LDDMM: geodesic shooting of control points and momenta (eq. 2), points carried along.
+
+    Parameters
+    ----------
+    kernel : GaussianKernel
+    integrator : str or Integrator
+    n_steps : int
+
+    Attributes
+    ----------
+    system : HamiltonianSystem
+        Eq. 2 in the kernel backend's layout (:func:`hamiltonian_system`).
+    """
+
+    label = "LDDMM"
+    moves_control_points = True
+
+    def __init__(self, kernel: GaussianKernel, integrator, n_steps: int):
+        super().__init__(kernel, integrator, n_steps)
+        self.system = hamiltonian_system(kernel)
+
+    def forward(
+        self,
+        template,
+        control_points,
+        momenta,
+        keep_stages: bool = False,
+        dense: bool = False,
+        return_trajectory: bool = False,
+    ) -> FlowPass:
+        """Shoot ``(control_points, momenta)``, carrying ``template`` (unless ``dense`` or None).
+
+        ``flow_pass.state`` is the :class:`ShootingResult`; ``flow_pass.deformed`` is
+        ``phi_1(template)``, or ``c(1)`` when the template is the control points.
+        """
+        system = self.system
+        carried = not dense and template is not None
+        arrays = (control_points, momenta, template) if carried else (control_points, momenta)
+        out = self.integrator.integrate(
+            system.rhs,
+            system.to_layout(*arrays),
+            n_steps=self.n_steps,
+            return_trajectory=return_trajectory,
+            keep_stages=keep_stages,
+            return_initial_rate=True,
+        )
+        d = np.shape(control_points)[1]
+        final = tuple(system.from_layout(a, d) for a in out[0])
+        trajectory = None
+        if return_trajectory:
+            trajectory = [tuple(system.from_layout(a, d) for a in y) for y in out[1]]
+        velocity = system.from_layout(out[-1][0], d)
+        shot = ShootingResult(
+            control_points=final[0],
+            momenta=final[1],
+            points=final[2] if carried else None,
+            trajectory=trajectory,
+            stages=out[-2] if keep_stages else None,
+            integrator=self.integrator,
+            n_steps=self.n_steps,
+            initial_velocity=velocity,
+            system=system,
+        )
+        return FlowPass(
+            deformed=final[2] if carried else final[0],
+            control_points=control_points,
+            momenta=momenta,
+            norm_sq=float((momenta * velocity).sum()),
+            velocity=velocity,
+            state=shot,
+        )
+
+    def adjoint(self, flow_pass: FlowPass, cot):
+        shot = flow_pass.state
+        carried = shot.points is not None
+        cot = _in_layout(shot, None if carried else cot, None, cot if carried else None)
+        grad = self.integrator.backward(self.system.rhs_vjp, shot.stages, 1.0 / self.n_steps, cot)
+        return _from_layout(shot, grad[:2])
+
+    def tangent(self, flow_pass: FlowPass, d_c, d_mu):
+        shot = flow_pass.state
+        tan = _in_layout(shot, d_c, d_mu, None)
+        out = self.integrator.forward(self.system.rhs_jvp, shot.stages, 1.0 / self.n_steps, tan)
+        return _from_layout(shot, out[2:] if shot.points is not None else out[:1])[0]
 
 
 def shoot(
@@ -115,6 +194,8 @@ def shoot(
 ) -> ShootingResult:
     """Integrate the Hamiltonian system from ``(c, mu)`` over ``[0, 1]``, flowing ``points``.
 
+    The forward pass of :class:`HamiltonianFlow`.
+
     Parameters
     ----------
     kernel : GaussianKernel
@@ -128,51 +209,11 @@ def shoot(
     keep_stages : bool
         Keep the stage states needed by :func:`shooting_vjp`.
     """
-    scheme = get_integrator(integrator)
-    base_rhs, _, _ = hamiltonian_system(kernel)
-    first: list = []
-
-    def rhs(state):
-        out = base_rhs(state)
-        if not first:
-            first.append(out)
-        return out
-
-    state = (np.asarray(control_points, dtype=float), np.asarray(momenta, dtype=float))
-    if points is not None:
-        state += (np.asarray(points, dtype=float),)
-    out = scheme.integrate(
-        rhs,
-        state,
-        n_steps=n_steps,
-        return_trajectory=return_trajectory,
-        keep_stages=keep_stages,
-    )
-    if not isinstance(out, tuple) or not isinstance(out[0], tuple):
-        out = (out,)
-    final = out[0]
-    traj = out[1] if return_trajectory else None
-    stages = out[-1] if keep_stages else None
-    return ShootingResult(
-        control_points=final[0],
-        momenta=final[1],
-        points=final[2] if points is not None else None,
-        trajectory=traj,
-        stages=stages,
-        integrator=scheme,
-        n_steps=int(n_steps),
-        initial_velocity=first[0][0],
-    )
-
-
-def _state_like(result: ShootingResult, c, mu, x) -> tuple:
-    """A (co)tangent ``(c, mu[, x])`` of the shot's state, zeros where None is given."""
-    parts = [(c, result.control_points), (mu, result.momenta)]
-    if result.points is not None:
-        parts.append((x, result.points))
-    return tuple(
-        np.zeros_like(ref) if v is None else np.asarray(v, dtype=float) for v, ref in parts
-    )
+    flow = HamiltonianFlow(kernel, integrator, n_steps)
+    momenta = np.asarray(momenta, dtype=float)
+    return flow.forward(
+        points, control_points, momenta, keep_stages, return_trajectory=return_trajectory
+    ).state
 
 
 def shooting_vjp(
@@ -196,10 +237,11 @@ def shooting_vjp(
     """
     if result.stages is None:
         raise ValueError("shooting_vjp: shoot must be called with keep_stages=True")
-    _, rhs_vjp, _ = hamiltonian_system(kernel)
-    cot = _state_like(result, cot_control_points, cot_momenta, cot_points)
+    cot = _in_layout(result, cot_control_points, cot_momenta, cot_points)
     h = 1.0 / result.n_steps
-    grad = result.integrator.backward(rhs_vjp, result.stages, h, cot)
+    grad = _from_layout(
+        result, result.integrator.backward(result.system.rhs_vjp, result.stages, h, cot)
+    )
     return grad[0], grad[1], (grad[2] if len(grad) > 2 else None)
 
 
@@ -226,8 +268,9 @@ def shooting_jvp(
     """
     if result.stages is None:
         raise ValueError("shooting_jvp: shoot must be called with keep_stages=True")
-    _, _, rhs_jvp = hamiltonian_system(kernel)
-    tan = _state_like(result, d_control_points, d_momenta, d_points)
+    tan = _in_layout(result, d_control_points, d_momenta, d_points)
     h = 1.0 / result.n_steps
-    out = result.integrator.forward(rhs_jvp, result.stages, h, tan)
+    out = _from_layout(
+        result, result.integrator.forward(result.system.rhs_jvp, result.stages, h, tan)
+    )
     return out[0], out[1], (out[2] if len(out) > 2 else None)

@@ -44,6 +44,8 @@ __all__ = [
     "JIT_FLAGS",
     "PARALLEL_MIN_PAIRS",
     "solve_lower",
+    "LOOPS",
+    "CVJP_CHUNKS",
 ]
 
 
@@ -195,6 +197,16 @@ def _cvjp_ser(x, c, mom, cot, inv_s2, g_x, buf_c, buf_m):  # pragma: no cover - 
 
 
 CVJP_CHUNKS = 8
+
+#: The compiled loops on ``(3, n)`` arrays, ``(serial, parallel)`` for each sum (indexed by
+#: :func:`use_parallel`): what :class:`~manifolds.lddmm.hamiltonian_system.CompiledHamiltonianSystem`
+#: calls without converting layouts.
+LOOPS = {
+    "convolve": (_conv_ser, _conv_par),
+    "hamiltonian_rhs": (_rhs_ser, _rhs_par),
+    "hamiltonian_vjp": (_hvjp_ser, _hvjp_par),
+    "convolve_vjp": (_cvjp_ser, _cvjp_par),
+}
 
 
 def gaussian(sq_dist: np.ndarray) -> np.ndarray:

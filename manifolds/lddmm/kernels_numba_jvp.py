@@ -16,7 +16,7 @@ from numba import njit, prange
 
 from ..kernels.numba_primitives import JIT_FLAGS, check_dim, from_soa, gexp, to_soa, use_parallel
 
-__all__ = ["convolve_jvp", "hamiltonian_jvp"]
+__all__ = ["convolve_jvp", "hamiltonian_jvp", "LOOPS"]
 
 
 @njit(inline="always", **JIT_FLAGS)
@@ -88,6 +88,10 @@ def _hjvp_par(c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - comp
 def _hjvp_ser(c, mu, dc, dmu, inv_s2, out_c, out_mu):  # pragma: no cover - compiled
     for i in range(c.shape[1]):
         _hjvp_row(i, c, mu, dc, dmu, inv_s2, out_c, out_mu)
+
+
+#: ``(serial, parallel)`` loops on ``(3, n)`` arrays (see ``kernels_numba.LOOPS``).
+LOOPS = {"convolve_jvp": (_cjvp_ser, _cjvp_par), "hamiltonian_jvp": (_hjvp_ser, _hjvp_par)}
 
 
 def convolve_jvp(x, c, mom, dx, dc, dmom, inv_s2):

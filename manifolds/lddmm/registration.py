@@ -29,9 +29,10 @@ from manifolds.data_terms import DataTerm, SquaredDistance
 
 from ..errors import ConvergenceWarning
 from ..numerics.integrators import Integrator
-from ..numerics.solvers import get_solver
+from ..numerics.solvers import get_solver, limit_blas_threads
 from .control_points import is_dense
-from .flow_models import FlowModel, HamiltonianFlow
+from .flow_models import FlowModel
+from .hamiltonian_shooting import HamiltonianFlow
 from .kernels import GaussianKernel
 from .preconditioner import IdentityPreconditioner, make_preconditioner
 from .registration_problem import RegistrationProblem
@@ -170,14 +171,16 @@ def register(
     The problem is built by :func:`build_registration_problem` and solved by the
     settings' solver (:mod:`manifolds.numerics.solvers`).
     """
-    problem, x0 = build_registration_problem(
-        flow, template, target, alpha, settings, control_points=control_points,
-        initial_momenta=initial_momenta, kernel=kernel,
-    )  # fmt: skip
-    opt = get_solver(settings.solver)(
-        problem, x0, settings.solver_options(), settings.stopping_rule()
-    )
-    result = problem.result(opt)
+    options = settings.solver_options()
+    # The set-up (the preconditioner's Gram matrix and Cholesky factor) is small BLAS
+    # work too: on the solver's BLAS threads, not the machine's.
+    with limit_blas_threads(options.blas_threads):
+        problem, x0 = build_registration_problem(
+            flow, template, target, alpha, settings, control_points=control_points,
+            initial_momenta=initial_momenta, kernel=kernel,
+        )  # fmt: skip
+        opt = get_solver(settings.solver)(problem, x0, options, settings.stopping_rule())
+        result = problem.result(opt)
     if warn and not result.converged:
         warnings.warn(
             ConvergenceWarning(

@@ -157,22 +157,21 @@ class RegistrationProblem:
         return np.concatenate([g_z, (self.c_scale * g_c).ravel()])
 
     # ------------------------------------------------------------ evaluations
-    def evaluate(self, x, with_gradient: bool = True) -> Evaluation:
-        """Objective, gradient and flow pass at ``x``; the latest evaluation is kept.
+    def value_and_gradient(self, x):
+        """Normalised objective and its gradient with respect to ``x``.
 
-        The forward pass keeps its stages, so that a gradient (adjoint pass) or
-        Gauss-Newton products asked later at the same ``x`` need no new shooting.
+        The forward pass keeps its stages, so that the adjoint pass here, or
+        Gauss-Newton products asked later at the same ``x``, need no new shooting;
+        the latest evaluation is kept (:meth:`evaluate`).
         """
         key = x.tobytes()
         last_key, ev = self._last
         if last_key != key:
             mu, c = self.unpack(x)
-            flow = self.model.forward(self.template, c, mu, keep_stages=True, dense=self.dense)
-            self.n_flow_evaluations += 1
-            data_value = self.data_term.value(flow.deformed)
-            ev = Evaluation(data_value + self.alpha**2 * flow.norm_sq, None, None, flow)
-            self._last = (key, ev)
-        if with_gradient and ev.grad_mu is None:
+            ev = self._record(
+                key, self.model.forward(self.template, c, mu, keep_stages=True, dense=self.dense)
+            )
+        if ev.grad_mu is None:
             flow = ev.flow_pass
             _, cot = self.data_term.value_and_gradient(flow.deformed)
             g_c, g_mu = self.model.adjoint(flow, cot)
@@ -183,12 +182,29 @@ class RegistrationProblem:
                 grad_reg = rkhs_norm_sq_gradient(self.kernel, flow.control_points, flow.momenta)
                 g_c = g_c + alpha2 * grad_reg[0]
             ev.grad_c = g_c
+        return ev.value / self.scale, self.to_variables_gradient(ev.grad_c, ev.grad_mu) / self.scale
+
+    def _record(self, key: bytes, flow: FlowPass) -> Evaluation:
+        """Keep the forward pass ``flow`` at the variables of bytes ``key`` as the latest."""
+        self.n_flow_evaluations += 1
+        data_value = self.data_term.value(flow.deformed)
+        ev = Evaluation(data_value + self.alpha**2 * flow.norm_sq, None, None, flow)
+        self._last = (key, ev)
         return ev
 
-    def value_and_gradient(self, x):
-        """Normalised objective and its gradient with respect to ``x``."""
-        ev = self.evaluate(x)
-        return ev.value / self.scale, self.to_variables_gradient(ev.grad_c, ev.grad_mu) / self.scale
+    def evaluate(self, x, with_gradient: bool = True) -> Evaluation:
+        """Objective, gradient (natural variables) and flow pass at ``x``; the latest is kept."""
+        key = x.tobytes()
+        last_key, ev = self._last
+        if last_key == key and (ev.grad_mu is not None or not with_gradient):
+            return ev
+        if with_gradient:
+            self.value_and_gradient(x)
+            return self._last[1]
+        mu, c = self.unpack(x)
+        return self._record(
+            key, self.model.forward(self.template, c, mu, keep_stages=True, dense=self.dense)
+        )
 
     def value(self, x) -> float:
         """Normalised objective at ``x`` (no adjoint pass)."""

@@ -16,8 +16,8 @@ import numpy as np
 from ..numerics.integrators import Integrator
 from ..validation import check_array, check_finite_result
 from .control_points import is_dense
-from .flow_models import HamiltonianFlow
-from .hamiltonian_shooting import hamiltonian_system, shoot
+from .hamiltonian_shooting import HamiltonianFlow, shoot
+from .hamiltonian_system import hamiltonian_system
 from .landmark_space import KernelLandmarkSpace
 from .tangent import LandmarkTangent
 
@@ -100,10 +100,11 @@ class LDDMMLandmarks(KernelLandmarkSpace):
         -------
         control_points, momenta : arrays, shape ``(n_cp, d)``
         """
-        rhs, _, _ = hamiltonian_system(self.kernel)
-        state = (np.asarray(control_points, dtype=float), np.asarray(momenta, dtype=float))
-        (c, mu), _ = self.integrator.step(rhs, state, float(h))
-        return c, mu
+        system = hamiltonian_system(self.kernel)
+        state = system.to_layout(control_points, momenta)
+        (c, mu), _ = self.integrator.step(system.rhs, state, float(h))
+        d = np.shape(control_points)[1]
+        return system.from_layout(c, d), system.from_layout(mu, d)
 
     def flow(self, template, momenta, points, control_points=None) -> np.ndarray:
         """``phi_1(points)`` for the deformation shot from the template's control points."""

@@ -28,11 +28,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..numerics.integrators import Integrator, get_integrator
+from .flow_models import FlowModel, FlowPass
 from .kernels import GaussianKernel
 
 __all__ = [
     "FlowResult",
     "StationaryFlow",
+    "StationaryKernelFlow",
     "kernel_velocity",
     "integrate_stationary",
     "kernel_flow",
@@ -277,3 +279,46 @@ class StationaryFlow:
     def inverse(self) -> StationaryFlow:
         """``exp(-t v)``, the inverse of ``exp(t v)`` up to the integration error."""
         return self.scaled(-1.0)
+
+
+class StationaryKernelFlow(FlowModel):
+    """SVF: the flow of the stationary field ``v(x) = sum_j K(x, c_j) m_j`` (c, m fixed in time)."""
+
+    label = "SVF"
+    default_integrator = "rk4"
+
+    def forward(self, template, control_points, momenta, keep_stages=False, dense=False):
+        res = kernel_flow(
+            self.kernel,
+            control_points,
+            momenta,
+            template,
+            self.integrator,
+            self.n_steps,
+            keep_stages=keep_stages,
+        )
+        velocity = self.kernel.convolve(control_points, control_points, momenta)
+        return FlowPass(
+            deformed=res.points,
+            control_points=control_points,
+            momenta=momenta,
+            norm_sq=float((momenta * velocity).sum()),
+            velocity=velocity,
+            state=res,
+        )
+
+    def adjoint(self, flow_pass, cot):
+        _, g_m, g_c = kernel_flow_vjp(
+            self.kernel, flow_pass.control_points, flow_pass.momenta, flow_pass.state, cot
+        )
+        return g_c, g_m
+
+    def tangent(self, flow_pass, d_c, d_mu):
+        return kernel_flow_jvp(
+            self.kernel,
+            flow_pass.control_points,
+            flow_pass.momenta,
+            flow_pass.state,
+            d_momenta=d_mu,
+            d_control_points=d_c,
+        )

@@ -20,11 +20,11 @@ import warnings
 import numpy as np
 
 from ..numerics.integrators import Integrator
-from .flow_models import StationaryKernelFlow
 from .kernels import GaussianKernel
 from .registration import register, registration_objective
 from .registration_result import RegistrationResult
 from .settings import RegistrationSettings
+from .stationary_flow import StationaryKernelFlow
 
 __all__ = ["svf_objective", "register_svf"]
 

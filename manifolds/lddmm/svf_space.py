@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .flow_models import StationaryKernelFlow
 from .landmark_space import KernelLandmarkSpace
-from .stationary_flow import StationaryFlow, kernel_flow
+from .stationary_flow import StationaryFlow, StationaryKernelFlow, kernel_flow
 
 __all__ = ["SVFLandmarks"]
 

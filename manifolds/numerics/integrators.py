@@ -71,42 +71,16 @@ class Integrator:
 
     def step(self, rhs: Rhs, y: State, h: float) -> tuple[State, list[State]]:
         """One step; returns the new state and the stage states ``Y_s``."""
-        ks: list[State] = []
-        stages: list[State] = []
-        for s in range(self.n_stages):
-            coefs = [(h * a, ks[r]) for r, a in enumerate(self.a[s]) if a != 0.0]
-            ys = y if not coefs else _axpy(y, coefs)
-            stages.append(ys)
-            ks.append(rhs(ys))
-        new = _axpy(y, [(h * b, ks[s]) for s, b in enumerate(self.b) if b != 0.0])
-        return new, stages
+        new, all_stages = self.integrate(rhs, y, n_steps=1, t_final=h, keep_stages=True)
+        return new, all_stages[0]
 
     def step_vjp(self, rhs_vjp: RhsVjp, stages: list[State], h: float, cot: State) -> State:
         """Pull the cotangent ``cot`` of ``y'`` back to the cotangent of ``y`` (exact)."""
-        n = self.n_stages
-        ybar_stage: list[State | None] = [None] * n
-        ybar = [c.copy() for c in cot]
-        for s in range(n - 1, -1, -1):
-            coefs = [(h * self.b[s], cot)] if self.b[s] != 0.0 else []
-            coefs += [
-                (h * self.a[q][s], ybar_stage[q]) for q in range(s + 1, n) if self.a[q][s] != 0.0
-            ]
-            if not coefs:
-                continue
-            kbar = tuple(sum(coef * v[i] for coef, v in coefs) for i in range(len(cot)))
-            ybar_stage[s] = rhs_vjp(stages[s], kbar)
-            for i, g in enumerate(ybar_stage[s]):
-                ybar[i] += g
-        return tuple(ybar)
+        return self.backward(rhs_vjp, [stages], h, cot)
 
     def step_jvp(self, rhs_jvp: RhsJvp, stages: list[State], h: float, tangent: State) -> State:
         """Push the tangent ``dy`` of ``y`` forward to the tangent of ``y'`` (exact)."""
-        dks: list[State] = []
-        for s in range(self.n_stages):
-            coefs = [(h * a, dks[r]) for r, a in enumerate(self.a[s]) if a != 0.0]
-            dys = tangent if not coefs else _axpy(tangent, coefs)
-            dks.append(rhs_jvp(stages[s], dys))
-        return _axpy(tangent, [(h * b, dks[s]) for s, b in enumerate(self.b) if b != 0.0])
+        return self.forward(rhs_jvp, [stages], h, tangent)
 
     def integrate(
         self,
@@ -116,8 +90,12 @@ class Integrator:
         t_final: float = 1.0,
         return_trajectory: bool = False,
         keep_stages: bool = False,
+        return_initial_rate: bool = False,
     ):
         """Integrate from ``t = 0`` to ``t_final`` in ``n_steps`` equal steps.
+
+        The stages are evaluated here, step after step (:meth:`step` is one step of
+        this loop), so that ``rhs`` is called directly.
 
         Returns
         -------
@@ -126,7 +104,10 @@ class Integrator:
         trajectory : list of State, only if ``return_trajectory``
             The ``n_steps + 1`` states at the step boundaries.
         stages : list of list of State, only if ``keep_stages``
-            The stage states of every step (input of :meth:`step_vjp`).
+            The stage states of every step (input of :meth:`backward`).
+        initial_rate : State, only if ``return_initial_rate``
+            ``f(y0)``, the rate of the first stage (every explicit scheme starts
+            at ``y0``), e.g. the initial velocity of a shooting.
         """
         if int(n_steps) != n_steps or n_steps < 1:
             raise ValueError(f"{self.name}: n_steps must be a positive integer, got {n_steps}")
@@ -134,8 +115,18 @@ class Integrator:
         y = tuple(np.asarray(v, dtype=float) for v in y0)
         traj = [y] if return_trajectory else None
         all_stages = [] if keep_stages else None
+        initial_rate = None
         for _ in range(int(n_steps)):
-            y, stages = self.step(rhs, y, h)
+            ks: list[State] = []
+            stages: list[State] = []
+            for s in range(self.n_stages):
+                coefs = [(h * a, ks[r]) for r, a in enumerate(self.a[s]) if a != 0.0]
+                ys = y if not coefs else _axpy(y, coefs)
+                stages.append(ys)
+                ks.append(rhs(ys))
+            if initial_rate is None:
+                initial_rate = ks[0]
+            y = _axpy(y, [(h * b, ks[s]) for s, b in enumerate(self.b) if b != 0.0])
             if traj is not None:
                 traj.append(y)
             if all_stages is not None:
@@ -145,18 +136,51 @@ class Integrator:
             out += (traj,)
         if keep_stages:
             out += (all_stages,)
+        if return_initial_rate:
+            out += (initial_rate,)
         return out[0] if len(out) == 1 else out
 
     def backward(self, rhs_vjp: RhsVjp, all_stages: list[list[State]], h: float, cot: State):
-        """Pull a cotangent of the final state back through all steps to ``y0``."""
+        """Pull a cotangent of the final state back through all steps to ``y0`` (exact).
+
+        Per step, from the last stage to the first (the stage loop of
+        :meth:`step_vjp`, written here so that ``rhs_vjp`` is called directly)::
+
+            kbar_s = h b[s] ybar' + h sum_{q>s} a[q][s] Ybar_q,   Ybar_s = (df(Y_s))^T kbar_s.
+        """
+        n = self.n_stages
         for stages in reversed(all_stages):
-            cot = self.step_vjp(rhs_vjp, stages, h, cot)
+            ybar_stage: list[State | None] = [None] * n
+            ybar = [c.copy() for c in cot]
+            for s in range(n - 1, -1, -1):
+                coefs = [(h * self.b[s], cot)] if self.b[s] != 0.0 else []
+                coefs += [
+                    (h * self.a[q][s], ybar_stage[q])
+                    for q in range(s + 1, n)
+                    if self.a[q][s] != 0.0
+                ]
+                if not coefs:
+                    continue
+                kbar = tuple(sum(coef * v[i] for coef, v in coefs) for i in range(len(cot)))
+                ybar_stage[s] = rhs_vjp(stages[s], kbar)
+                for i, g in enumerate(ybar_stage[s]):
+                    ybar[i] += g
+            cot = tuple(ybar)
         return cot
 
     def forward(self, rhs_jvp: RhsJvp, all_stages: list[list[State]], h: float, tangent: State):
-        """Push a tangent of ``y0`` through all steps to the tangent of the final state."""
+        """Push a tangent of ``y0`` through all steps to the tangent of the final state (exact).
+
+        Per step (the loop of :meth:`step_jvp`, written here so that ``rhs_jvp`` is
+        called directly): ``dY_s = dy + h sum_{r<s} a[s][r] dk_r``, ``dk_s = df(Y_s) dY_s``.
+        """
         for stages in all_stages:
-            tangent = self.step_jvp(rhs_jvp, stages, h, tangent)
+            dks: list[State] = []
+            for s in range(self.n_stages):
+                coefs = [(h * a, dks[r]) for r, a in enumerate(self.a[s]) if a != 0.0]
+                dys = tangent if not coefs else _axpy(tangent, coefs)
+                dks.append(rhs_jvp(stages[s], dys))
+            tangent = _axpy(tangent, [(h * b, dks[s]) for s, b in enumerate(self.b) if b != 0.0])
         return tangent
 
 

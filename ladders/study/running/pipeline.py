@@ -229,17 +229,6 @@ def _counted_convergence_warnings():
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
-def _registration(space, dist, t, s) -> RegistrationSummary:
-    reg = space.register(t, s)
-    return RegistrationSummary(
-        error=float(dist(reg.deformed, s)),
-        rms=float(reg.rms_error),
-        rkhs_norm=float(reg.rkhs_norm),
-        converged=bool(reg.converged),
-        inverse_consistency=float(space.inverse_consistency(t, s, distance=dist)),
-    )
-
-
 def _other_transport(config, space, t, s, s2) -> tuple[str, np.ndarray, np.ndarray | None]:
     """The fanning scheme (LDDMM) or the SVF pole ladder by conjugation (SVF).
 
@@ -365,7 +354,14 @@ def compute_pair(
     with _counted_convergence_warnings():
         space = make_space(config, atlas, alpha2)
         dist = point_distance(config.distance, space.point_shape)
-        registration = _registration(space, dist, atlas, subject.ed)
+        reg = space.register(atlas, subject.ed)
+        registration = RegistrationSummary(
+            error=float(dist(reg.deformed, subject.ed)),
+            rms=float(reg.rms_error),
+            rkhs_norm=float(reg.rkhs_norm),
+            converged=bool(reg.converged),
+            inverse_consistency=float(space.inverse_consistency(atlas, subject.ed, distance=dist)),
+        )
         errors, transports, shapes = _transports(
             config, space, dist, atlas, faces, subject, las_subject
         )

@@ -13,25 +13,6 @@ from .stopping import StoppingRule
 __all__ = ["minimize_lbfgsb"]
 
 
-class _Counted:
-    """``x -> (f, g)`` with the latest evaluation kept (L-BFGS-B asks twice for the same x)."""
-
-    def __init__(self, problem):
-        self.problem = problem
-        self.n_evals = 0
-        self.key = None
-        self.f = None
-        self.g = None
-
-    def __call__(self, x):
-        key = x.tobytes()
-        if key != self.key:
-            f, g = self.problem.value_and_gradient(x)
-            self.n_evals += 1
-            self.key, self.f, self.g = key, float(f), np.asarray(g, dtype=float).ravel()
-        return self.f, self.g.copy()
-
-
 def minimize_lbfgsb(
     problem, x0, options: SolverOptions | None = None, rule: StoppingRule | None = None
 ) -> OptimizationResult:
@@ -54,7 +35,10 @@ def minimize_lbfgsb(
     """
     options = SolverOptions() if options is None else options
     rule = StoppingRule() if rule is None else rule
-    fun = _Counted(problem)
+    # scipy calls the problem itself (it keeps its own latest evaluation, as scipy
+    # does); the evaluations counted are scipy's, whose first is at x0.
+    fun = problem.value_and_gradient
+    n_evals = 0
     x0 = np.asarray(x0, dtype=float).ravel()
     history: list = []
     reason: list = []
@@ -95,6 +79,7 @@ def minimize_lbfgsb(
                 },
             )
             n_iter += int(res.nit)
+            n_evals += int(res.nfev)
             x = np.asarray(res.x, dtype=float)
             restart = every > 0 and res.nit >= every and not reason and n_iter < rule.max_iter
             if not restart:
@@ -113,7 +98,7 @@ def minimize_lbfgsb(
         fun=f,
         grad=g,
         n_iter=n_iter,
-        n_evals=fun.n_evals,
+        n_evals=n_evals,
         history=history,
         converged=converged,
         message=message,
