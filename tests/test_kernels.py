@@ -1,5 +1,9 @@
 """Gaussian kernel sums: closed forms, blockwise evaluation, compiled backend."""
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -176,3 +180,20 @@ def test_workers_share_the_cores_and_a_lone_computation_takes_them_all():
     assert numba.get_num_threads() == before
     with kernel_threads(None):
         assert numba.get_num_threads() == before
+
+
+@pytest.mark.skipif(not numba_available(), reason="the compiled loops need numba")
+@pytest.mark.parametrize("user_value", [None, "5"])
+def test_idle_openmp_threads_spin_briefly_unless_the_user_chose(user_value):
+    """Set before numba starts OpenMP (bench_threads_under_load.py measures why)."""
+    from manifolds.kernels.numba_primitives import GOMP_SPINCOUNT
+
+    expected = GOMP_SPINCOUNT if user_value is None else user_value
+    assert int(GOMP_SPINCOUNT) <= 10_000  # far below GNU OpenMP's 300,000
+    env = {k: v for k, v in os.environ.items() if k != "GOMP_SPINCOUNT"}
+    if user_value is not None:
+        env["GOMP_SPINCOUNT"] = user_value
+    code = "import os, manifolds.lddmm.kernels_numba; print(os.environ['GOMP_SPINCOUNT'])"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == expected

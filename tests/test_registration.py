@@ -198,3 +198,22 @@ def test_blas_thread_limit_is_applied_and_restored():
     assert blas_threads() == before
     with limit_blas_threads(None):
         assert blas_threads() == before
+
+
+def test_a_lone_registration_equals_the_same_registration_in_a_batch_worker():
+    """The set-up and the iterations run on the solver's BLAS threads whatever the caller's."""
+    import threadpoolctl
+
+    from ladders.study.cohort.benchmark_shapes import bent_ellipsoid
+    from manifolds.kernels import kernel_threads
+    from manifolds.numerics.solvers import limit_blas_threads
+
+    template, target, _ = bent_ellipsoid(3, twist=0.4, bend=0.2)
+    settings = RegistrationSettings(sigma=0.5, integrator="euler", max_iter=15)
+    args = (template, target, 0.02, settings)
+    with threadpoolctl.threadpool_limits(limits=4, user_api="blas"):
+        lone = register(*args, control_points=template, warn=False)
+    with kernel_threads(1), limit_blas_threads(1):  # what ladders.study.batch gives a worker
+        worker = register(*args, control_points=template, warn=False)
+    np.testing.assert_array_equal(lone.momenta, worker.momenta)
+    assert lone.objective == worker.objective

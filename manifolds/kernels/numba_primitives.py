@@ -15,9 +15,24 @@ terms (:mod:`manifolds.data_terms.surface_kernels_numba`) are built from these:
 
 from __future__ import annotations
 
+import os
+
 import numba
 import numpy as np
 from numba import njit
+
+#: Spins of an idle OpenMP thread before it sleeps, for the parallel loops (numba's
+#: ``omp`` threading layer, GNU OpenMP). The default, 300,000 spins, keeps each thread
+#: busy-waiting between the short parallel loops of a registration; when another
+#: process takes a core, the spinning threads and the loop's own threads fight for it
+#: and a parallel sum becomes several times slower than the serial one. With 1,000
+#: spins it costs nothing alone and stays near the serial time under load
+#: (``benchmarks/bench_threads_under_load.py``, table in ``docs/solvers.md``). A value
+#: the user set is kept; it must be set before OpenMP starts: numba starts it at the
+#: first parallel loop, not at import.
+GOMP_SPINCOUNT = "1000"
+os.environ.setdefault("GOMP_SPINCOUNT", GOMP_SPINCOUNT)
+
 
 __all__ = [
     "JIT_FLAGS",

@@ -41,7 +41,12 @@ from .hamiltonian_shooting import (
     shooting_jvp,
     shooting_vjp,
 )
-from .hamiltonian_system import CompiledHamiltonianSystem, HamiltonianSystem, hamiltonian_system
+from .hamiltonian_system import (
+    CompiledHamiltonianSystem,
+    HamiltonianSystem,
+    hamiltonian_system,
+    register_system,
+)
 from .kernels import GaussianKernel, numba_available
 from .landmark_space import KernelLandmarkSpace
 from .registration import (
@@ -108,6 +113,7 @@ __all__ = [
     "HamiltonianSystem",
     "CompiledHamiltonianSystem",
     "hamiltonian_system",
+    "register_system",
     "hamiltonian",
     "shoot",
     "shooting_vjp",

@@ -35,6 +35,8 @@ class Evaluation:
     grad_c: np.ndarray | None
     grad_mu: np.ndarray | None
     flow_pass: FlowPass
+    #: The gradient in the optimiser's variables (unnormalised), once asked.
+    grad_x: np.ndarray | None = None
 
 
 class RegistrationProblem:
@@ -115,6 +117,7 @@ class RegistrationProblem:
         self.joint = self._joint(mu, c)
         new = self.variables(mu, c)
         if key == x.tobytes():
+            ev.grad_x = None  # the variables changed
             self._last = (new.tobytes(), ev)
         return new
 
@@ -182,7 +185,9 @@ class RegistrationProblem:
                 grad_reg = rkhs_norm_sq_gradient(self.kernel, flow.control_points, flow.momenta)
                 g_c = g_c + alpha2 * grad_reg[0]
             ev.grad_c = g_c
-        return ev.value / self.scale, self.to_variables_gradient(ev.grad_c, ev.grad_mu) / self.scale
+        if ev.grad_x is None:  # solvers ask again at the accepted iterate: computed once
+            ev.grad_x = self.to_variables_gradient(ev.grad_c, ev.grad_mu)
+        return ev.value / self.scale, ev.grad_x / self.scale
 
     def _record(self, key: bytes, flow: FlowPass) -> Evaluation:
         """Keep the forward pass ``flow`` at the variables of bytes ``key`` as the latest."""
