@@ -30,3 +30,26 @@ def test_progress_callback_sees_every_result_and_an_empty_batch_yields_nothing()
     out = list(run_batch(threads_seen, [(5,), (6,)], progress=seen.append))
     assert seen == out
     assert list(run_batch(threads_seen, [])) == []
+
+
+def square_and_record(i, folder):
+    """A work function that leaves a trace of each item it ran."""
+    (folder / f"{i}.ran").write_text("")
+    return ("computed", i * i)
+
+
+def test_done_items_are_reused_without_running_and_come_first(tmp_path):
+    stored = {1: ("stored", 1), 3: ("stored", 9)}
+    tasks = [(i, tmp_path) for i in range(5)]
+    seen = []
+    for jobs in (1, 2):
+        out = list(run_batch(square_and_record, tasks, jobs=jobs, progress=seen.append,
+                             reuse=lambda i, folder: stored.get(i)))  # fmt: skip
+        assert out == [("stored", 1), ("stored", 9), ("computed", 0), ("computed", 4),
+                       ("computed", 16)]  # fmt: skip
+        assert sorted(p.name for p in tmp_path.glob("*.ran")) == ["0.ran", "2.ran", "4.ran"]
+    assert len(seen) == 10
+    everything = {i: ("stored", i) for i in range(5)}
+    assert list(run_batch(square_and_record, tasks, reuse=lambda i, f: everything[i])) == [
+        ("stored", i) for i in range(5)
+    ]

@@ -1,16 +1,17 @@
-"""One runner for the application's batches: a study's subjects, a correspondence's
+"""One resumable runner for the application's batches: a study's subjects, a correspondence's
 subjects, a meshing's images.
 
-Each step decides what is already done (the study's result store, the
-correspondence's records, the meshing's provenance files) and hands the rest to
-:func:`run_batch`, which runs ``work(*task)`` for every task, in ``jobs`` processes
-(joblib) or in this one, and yields each result as it finishes, so that the caller
-stores it at once: an interruption keeps every finished item, and a rerun resumes. The
-work functions record their own failures (a failing item returns a record saying why
-and never stops the others). Threads: a lone run lets the compiled kernel sums use
-every core; several workers share the cores
-(:func:`~manifolds.kernels.threads_per_worker`), and BLAS runs on one thread in every
-case, so that an item's numbers do not depend on ``jobs``.
+:func:`run_batch` asks each step's own ``reuse`` check whether an item is already done
+(the study's pair store, the correspondence's records, the meshing's provenance files:
+each knows what its results depend on) and yields those results at once; it runs
+``work(*task)`` for the others, in ``jobs`` processes (joblib) or in this one, and yields
+each result as it finishes, so that the caller (or the work function) stores it at
+once: an interruption keeps every finished item, and a rerun resumes. The work
+functions record their own failures (a failing item returns a record saying why and
+never stops the others). Threads: a lone run lets the compiled kernel sums use every
+core; several workers share the cores (:func:`~manifolds.kernels.threads_per_worker`),
+and BLAS runs on one thread in every case, so that an item's numbers do not depend on
+``jobs``.
 """
 
 from __future__ import annotations
@@ -37,8 +38,9 @@ def run_batch(
     desc: str = "items",
     unit: str = "item",
     ordered: bool = True,
+    reuse: Callable | None = None,
 ) -> Iterator:
-    """Run ``work(*task)`` for every task; yield each result as it finishes.
+    """Run ``work(*task)`` for every task not done yet; yield each result as it finishes.
 
     Parameters
     ----------
@@ -54,6 +56,10 @@ def run_batch(
         The progress bar's label and unit.
     ordered : bool
         Yield in the tasks' order (else as they finish).
+    reuse : callable, optional
+        ``reuse(*task)``, called here for every task before any runs: the stored
+        result of a task already done (yielded first, in the tasks' order, without
+        running it), or None (the task runs).
     """
     from joblib import Parallel, delayed
     from tqdm.auto import tqdm
@@ -61,11 +67,24 @@ def run_batch(
     tasks = list(tasks)
     if not tasks:
         return
-    threads = threads_per_worker(jobs)
-    runner = Parallel(n_jobs=jobs, return_as="generator" if ordered else "generator_unordered")
     bar = tqdm(total=len(tasks), desc=desc, unit=unit, disable=progress is not True)
+    pending = []
     try:
-        for result in runner(delayed(_call)(work, threads, task) for task in tasks):
+        for task in tasks:
+            stored = None if reuse is None else reuse(*task)
+            if stored is None:
+                pending.append(task)
+                continue
+            bar.update(1)
+            if callable(progress):
+                progress(stored)
+            yield stored
+        if not pending:
+            return
+        threads = threads_per_worker(jobs)
+        kind = "generator" if ordered else "generator_unordered"
+        runner = Parallel(n_jobs=jobs, return_as=kind)
+        for result in runner(delayed(_call)(work, threads, task) for task in pending):
             bar.update(1)
             if callable(progress):
                 progress(result)

@@ -142,17 +142,34 @@ def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict
     return MeshingSettings(**{**settings.as_dict(), "cut_plane": tuple(plane)})
 
 
+def _row(task: MeshingTask) -> dict:
+    return {"source": str(task.source), "frame": task.frame, "mesh": task.output, "status": "ok",
+            "error": "", "report": ""}  # fmt: skip
+
+
+def _meshed(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict | None:
+    """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of an image meshed before
+    from the same file, frame, label and settings (None: it is meshed)."""
+    out = folder / task.output
+    if task.error or not out.is_file():
+        return None
+    try:
+        sha = file_sha256(task.source)
+    except OSError:
+        return None  # the worker records why
+    if _record_matches(out.with_suffix(".json"), sha, task, label, settings):
+        return {**_row(task), "status": "skipped"}
+    return None
+
+
 def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict:
     out = folder / task.output
     record_path = out.with_suffix(".json")
-    row = {"source": str(task.source), "frame": task.frame, "mesh": task.output, "status": "ok",
-           "error": "", "report": ""}  # fmt: skip
+    row = _row(task)
     if task.error:
         return {**row, "status": "failed", "error": task.error}
     try:
         sha = file_sha256(task.source)
-        if out.is_file() and _record_matches(record_path, sha, task, label, settings):
-            return {**row, "status": "skipped"}
         image = read_label_image(task.source, task.frame)
         vertices, faces, report = extract_surface(image, label, settings)
         write_mesh(out, vertices, faces, atomic=True)
@@ -230,9 +247,11 @@ def mesh_label_images(
     records = []
     try:
         for record in run_batch(_mesh_one, tasks, jobs=jobs, progress=bool(progress),
-                                desc="images", unit="mesh"):  # fmt: skip
+                                desc="images", unit="mesh", reuse=_meshed):  # fmt: skip
             records.append(record)
     finally:
+        order = {t[0].output: i for i, t in enumerate(tasks)}  # the images' order
+        records.sort(key=lambda r: order[r["mesh"]])
         with atomic_path(folder / REPORT_FILE) as tmp:
             tmp.write_text(_report_csv(records), encoding="utf-8")
     return MeshingOutcome(folder, records)

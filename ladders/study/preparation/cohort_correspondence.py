@@ -118,16 +118,18 @@ def _reusable(
     return record if done and meshes else None
 
 
-def _run(tasks, records, outcome, jobs, progress, total):
-    """Report the reused subjects, then run ``tasks`` and report each as it finishes."""
-    if progress is not None:
-        for i, name in enumerate(outcome.reused):
-            progress(i + 1, total, name, records[name])
-    for record in run_batch(_correspond_one, tasks, jobs=jobs):
-        outcome.computed.append(record["subject"])
-        if progress is not None:
-            progress(len(outcome.reused) + len(outcome.computed), total, record["subject"], record)
-        yield record
+def _reuse_check(resume: bool, outcome):
+    """``reuse`` of :func:`~ladders.study.batch.run_batch`: a subject's record when it is done."""
+
+    def stored(name, slot, atlas, settings, factor, output, ext, fingerprint):
+        record = None
+        if resume:
+            record = _reusable(output / RECORDS / f"{name}.json", fingerprint, output, name, ext)
+        if record is not None:
+            outcome.reused.append(name)
+        return record
+
+    return stored
 
 
 def _correspond_one(name, slot, atlas, settings, factor, output, ext, fingerprint) -> dict:
@@ -241,17 +243,17 @@ def correspond_cohort(
     atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
 
     factors = {n: report.factors.get(n, 1.0) for n in entries}
-    records, pending = {}, []
-    for name, slot in entries.items():
-        fp = _fingerprint(settings, atlas_hash, slot, factors[name])
-        done = _reusable(output / RECORDS / f"{name}.json", fp, output, name, ext)
-        if resume and done is not None:
-            records[name] = done
-            outcome.reused.append(name)
-        else:
-            pending.append((name, slot, atlas_mesh, settings, factors[name], output, ext, fp))
-    for record in _run(pending, records, outcome, jobs, progress, len(entries)):
-        records[record["subject"]] = record
+    tasks = [(name, slot, atlas_mesh, settings, factors[name], output, ext,
+              _fingerprint(settings, atlas_hash, slot, factors[name]))
+             for name, slot in entries.items()]  # fmt: skip
+    records = {}
+    for record in run_batch(_correspond_one, tasks, jobs=jobs, reuse=_reuse_check(resume, outcome)):
+        name = record["subject"]
+        records[name] = record
+        if name not in outcome.reused:
+            outcome.computed.append(name)
+        if progress is not None:
+            progress(len(records), len(entries), name, record)
     outcome.records = [records[n] for n in entries]
     outcome.failed = [r["subject"] for r in outcome.records if r["status"] != "ok"]
     outcome.quality = write_quality_table(outcome.records, output, settings, report.assumed_units)

@@ -119,9 +119,18 @@ def _subject_task(config, atlas, faces, subject, alphas, store, config_id, meshe
     return report
 
 
+def _stored_subject(config, atlas, faces, subject, alphas, store, config_id, meshes=None):
+    """The report of a subject whose pairs are all stored with a result (None: it runs)."""
+    # Every pair is read, so that the store notes each unusable one (``store.unusable``).
+    stored = [store.load(subject.name, a2, _pair_hash(config_id, subject, a2)) for a2 in alphas]
+    if not all(isinstance(r, PairResult) for r in stored):
+        return None
+    return {"subject": subject.name, "computed": [], "busy": []}
+
+
 def _run_parallel(tasks, jobs: int, progress: bool) -> list[dict]:
     return list(run_batch(_subject_task, tasks, jobs=jobs, progress=progress, desc="subjects",
-                          unit="subject", ordered=False))  # fmt: skip
+                          unit="subject", ordered=False, reuse=_stored_subject))  # fmt: skip
 
 
 def _wait_for_other_runs(busy, by_name, store, config, atlas, faces, config_id, meshes) -> list:
@@ -163,20 +172,6 @@ def _collect(subjects, alphas, store, config_id) -> list[SubjectResults]:
         failures = tuple(r for r in stored if isinstance(r, FailedPair))
         results.append(SubjectResults(s.name, pairs, failures))
     return results
-
-
-def _pending(subjects, alphas, store, config_id) -> list[tuple[Subject, list[float]]]:
-    """Per subject, the alpha^2 without a successful stored result (subjects with none left out)."""
-    out = []
-    for s in subjects:
-        todo = [
-            a2
-            for a2 in alphas
-            if not isinstance(store.load(s.name, a2, _pair_hash(config_id, s, a2)), PairResult)
-        ]
-        if todo:
-            out.append((s, todo))
-    return out
 
 
 def _check_subjects(subjects) -> None:
@@ -245,12 +240,11 @@ def run_study(
     alphas = [float(a) for a in config.alpha2]
     by_name = {s.name: s for s in subjects}
     mesh_folder = output / "meshes" / config_id if meshes else None
-    tasks = [
-        (config, atlas, faces, s, todo, store, config_id, mesh_folder)
-        for s, todo in _pending(subjects, alphas, store, config_id)
-    ]
-    recomputed = dict(store.unusable)
+    # Every subject with the whole sweep: the runner reuses those stored in full
+    # (_stored_subject), and a worker skips the pairs already stored with a result.
+    tasks = [(config, atlas, faces, s, alphas, store, config_id, mesh_folder) for s in subjects]
     reports = _run_parallel(tasks, jobs, progress)
+    recomputed = dict(store.unusable)  # noted by the reuse check before anything ran
     computed = [(r["subject"], a) for r in reports for a in r["computed"]]
     busy = [(r["subject"], a) for r in reports for a in r["busy"]]
     computed += _wait_for_other_runs(
