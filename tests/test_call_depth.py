@@ -1,9 +1,9 @@
 """How deep a kernel sum sits below the study's pair computation.
 
 A reader follows ``compute_pair`` down to the compiled loop of a kernel sum: the
-registration's iterations must reach it in at most 8 calls of the project's own
-functions, none of them a pure forwarding layer, for the forward pass (the Hamiltonian
-right-hand side) and for the adjoint pass (its vector-Jacobian product).
+registration (its start and its iterations) must reach it in at most 8 calls of the
+project's own functions, none of them a pure forwarding layer, for the forward pass (the
+Hamiltonian right-hand side) and for the adjoint pass (its vector-Jacobian product).
 """
 
 from __future__ import annotations
@@ -64,14 +64,10 @@ def test_the_registrations_reach_a_kernel_sum_in_at_most_8_calls(monkeypatch, su
     cohort = make_synthetic_cohort(n_subjects=1, grid=(6, 4), seed=0)
     config = StudyConfig(registration=RegistrationSettings(sigma=10.0, kernel_backend="numba"))
     compute_pair(config, cohort.atlas, cohort.faces, cohort.subjects[0], 1.0)
-    # The registration T -> S of the pair, in the solver's iterations (its set-up
-    # evaluation at the start goes through the problem's construction).
+    # The registration T -> S of the pair: its start and its iterations.
     direct = [c for c in chains if c[1:2] == ["KernelLandmarkSpace.register"]]
-    iterations = [c for c in direct if "minimize_lbfgsb" in c]
-    assert iterations, f"no kernel sum reached from the registration's iterations: {chains[:3]}"
-    longest = max(iterations, key=len)
+    assert direct, f"no kernel sum reached from the registration: {chains[:3]}"
+    longest = max(direct, key=len)
     assert len(longest) <= MAX_CALLS, " -> ".join(longest)
-    expected = ["compute_pair", "KernelLandmarkSpace.register", "register", "minimize_lbfgsb"]
-    assert longest[:4] == expected, " -> ".join(longest)
-    # The bulk of the registration's sums are the iterations'.
-    assert len(iterations) > 0.6 * len(direct)
+    assert longest[:3] == ["compute_pair", "KernelLandmarkSpace.register", "register"]
+    assert sum("minimize_lbfgsb" in c for c in direct) > 0.6 * len(direct)

@@ -175,10 +175,11 @@ def register(
     # The set-up (the preconditioner's Gram matrix and Cholesky factor) is small BLAS
     # work too: on the solver's BLAS threads, not the machine's.
     with limit_blas_threads(options.blas_threads):
-        problem, x0 = build_registration_problem(
+        problem, mu0, cp = _unstarted_problem(
             flow, template, target, alpha, settings, control_points=control_points,
             initial_momenta=initial_momenta, kernel=kernel,
         )  # fmt: skip
+        x0 = problem.start(mu0, cp)  # the problem of build_registration_problem
         opt = get_solver(settings.solver)(problem, x0, options, settings.stopping_rule())
         result = problem.result(opt)
     if warn and not result.converged:
@@ -233,6 +234,17 @@ def build_registration_problem(
         The start in the solver's variables (the linearised start unless
         ``initial_momenta`` is given).
     """
+    problem, mu0, cp = _unstarted_problem(
+        flow, template, target, alpha, settings, control_points=control_points,
+        initial_momenta=initial_momenta, kernel=kernel,
+    )  # fmt: skip
+    return problem, problem.start(mu0, cp)
+
+
+def _unstarted_problem(
+    flow, template, target, alpha, settings, *, control_points, initial_momenta, kernel
+) -> tuple[RegistrationProblem, np.ndarray, np.ndarray]:
+    """The problem of :func:`build_registration_problem`, its start momenta and control points."""
     label = flow.label
     if settings.optimize_control_points and not flow.moves_control_points:
         raise ValueError(
@@ -257,4 +269,4 @@ def build_registration_problem(
     model = flow(kernel, settings.integrator or flow.default_integrator,
                         settings.n_steps)  # fmt: skip
     problem = RegistrationProblem(model, template, data_term, alpha, settings, pre, dense)
-    return problem, problem.start(mu0, cp)
+    return problem, mu0, cp

@@ -89,7 +89,9 @@ class RegistrationProblem:
         if self.optimise and s.precondition and s.joint_metric:
             self.joint = self._joint(mu0, self.control_points)
         x0 = self.variables(mu0, self.control_points)
-        f0 = self.evaluate(x0).value
+        self.scale = 1.0
+        self.value_and_gradient(x0)  # kept as the latest evaluation
+        f0 = self._last[1].value
         self.scale = f0 if f0 > 0 else 1.0
         return x0
 
