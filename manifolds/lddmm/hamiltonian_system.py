@@ -6,7 +6,10 @@ carried by the flow. A system gives the right-hand side and its two derivatives
 of the tangent-linear pass) on states stored the way its backend computes with
 them, so that a shooting converts its inputs once on the way in
 (:meth:`HamiltonianSystem.to_layout`) and its outputs once on the way out
-(:meth:`HamiltonianSystem.from_layout`), not at every kernel sum:
+(:meth:`HamiltonianSystem.from_layout`), not at every kernel sum. The kernel field of
+fixed control points and momenta (:meth:`HamiltonianSystem.velocity` and its
+derivatives) serves the stationary flows in the same layout
+(:func:`~manifolds.lddmm.stationary_flow.kernel_flow`):
 
 * :class:`HamiltonianSystem` (the ``"numpy"`` backend, the reference): ``(n, d)``
   arrays, the sums of :class:`~manifolds.lddmm.kernels.GaussianKernel`;
@@ -57,6 +60,18 @@ class HamiltonianSystem:
     def from_layout(self, arr: np.ndarray, d: int) -> np.ndarray:
         """One array of the system's layout back to ``(n, d)``."""
         return arr
+
+    def velocity(self, x, c, mom):
+        """The kernel field ``v(x_i) = sum_j K(x_i, c_j) mom_j`` (all in the layout)."""
+        return self.kernel.convolve(x, c, mom)
+
+    def velocity_vjp(self, x, c, mom, cot) -> State:
+        """Gradients ``(g_x, g_c, g_mom)`` of ``<cot, velocity(x, c, mom)>``."""
+        return self.kernel.convolve_vjp(x, c, mom, cot)
+
+    def velocity_jvp(self, x, c, mom, dx, dc, dmom):
+        """Tangent of ``velocity(x, c, mom)`` along ``(dx, dc, dmom)``."""
+        return self.kernel.convolve_jvp(x, c, mom, dx, dc, dmom)
 
     def rhs(self, state: State) -> State:
         """``(dc/dt, dmu/dt[, dx/dt])`` at ``state = (c, mu[, x])``."""
@@ -113,6 +128,24 @@ class CompiledHamiltonianSystem(HamiltonianSystem):
 
     def from_layout(self, arr: np.ndarray, d: int) -> np.ndarray:
         return self._from(arr, d)
+
+    def velocity(self, x, c, mom):
+        v = np.empty((3, x.shape[1]))
+        self._conv[self._par(x.shape[1] * c.shape[1])](x, c, mom, self._s, v)
+        return v
+
+    def velocity_vjp(self, x, c, mom, cot) -> State:
+        n = c.shape[1]
+        chunks = max(1, min(self._chunks, x.shape[1]))
+        g_x = np.empty((3, x.shape[1]))
+        buf_c, buf_m = np.zeros((chunks, 3, n)), np.zeros((chunks, 3, n))
+        self._cvjp[self._par(x.shape[1] * n)](x, c, mom, cot, self._s, g_x, buf_c, buf_m)
+        return g_x, buf_c.sum(axis=0), buf_m.sum(axis=0)
+
+    def velocity_jvp(self, x, c, mom, dx, dc, dmom):
+        t_x = np.empty((3, x.shape[1]))
+        self._cjvp[self._par(x.shape[1] * c.shape[1])](x, c, mom, dx, dc, dmom, self._s, t_x)
+        return t_x
 
     def rhs(self, state: State) -> State:
         c, mu = state[0], state[1]

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..numerics.integrators import Integrator, get_integrator
 from .flow_models import FlowModel, FlowPass
+from .hamiltonian_system import HamiltonianSystem, hamiltonian_system
 from .kernels import GaussianKernel
 
 __all__ = [
@@ -58,6 +59,9 @@ class FlowResult:
     integrator : Integrator
     n_steps : int
     t_final : float
+    system : HamiltonianSystem, or None
+        For :func:`kernel_flow`: the kernel's system, in whose layout ``stages`` are
+        (None: ``(k, d)`` arrays).
     """
 
     points: np.ndarray
@@ -65,6 +69,7 @@ class FlowResult:
     integrator: Integrator | None = None
     n_steps: int = 10
     t_final: float = 1.0
+    system: HamiltonianSystem | None = field(default=None, repr=False)
 
 
 def kernel_velocity(kernel: GaussianKernel, control_points, momenta) -> Velocity:
@@ -121,15 +126,21 @@ def kernel_flow(
     t_final: float = 1.0,
     keep_stages: bool = False,
 ) -> FlowResult:
-    """``exp(t_final v)(points)`` for the kernel field ``v`` of ``(control_points, momenta)``."""
-    return integrate_stationary(
-        kernel_velocity(kernel, control_points, momenta),
-        points,
-        integrator,
-        n_steps,
-        t_final,
-        keep_stages,
+    """``exp(t_final v)(points)`` for the kernel field ``v`` of ``(control_points, momenta)``.
+
+    Integrated in the layout of the kernel's backend (:func:`hamiltonian_system`): the
+    inputs are converted once, the stages kept in that layout, the points converted back.
+    """
+    system = hamiltonian_system(kernel)
+    c, m, x = system.to_layout(control_points, momenta, points)
+    res = integrate_stationary(
+        lambda y: system.velocity(y, c, m), x, integrator, n_steps, t_final, keep_stages
     )
+    d = np.shape(points)[1]
+    return FlowResult(
+        system.from_layout(res.points, d), res.stages, res.integrator, res.n_steps,
+        res.t_final, system,
+    )  # fmt: skip
 
 
 def kernel_flow_vjp(
@@ -162,21 +173,21 @@ def kernel_flow_vjp(
     """
     if result.stages is None:
         raise ValueError("kernel_flow_vjp: kernel_flow must be called with keep_stages=True")
-    cp = np.asarray(control_points, dtype=float)
-    mom = np.asarray(momenta, dtype=float)
+    system = result.system or HamiltonianSystem(kernel)
+    cp, mom, cot = system.to_layout(control_points, momenta, cot_points)
     g_mom = np.zeros_like(mom)
     g_cp = np.zeros_like(cp)
 
     def rhs_vjp(state, cot):
-        g_x, g_c, g_m = kernel.convolve_vjp(state[0], cp, mom, cot[0])
+        g_x, g_c, g_m = system.velocity_vjp(state[0], cp, mom, cot[0])
         g_mom[...] += g_m
         g_cp[...] += g_c
         return (g_x,)
 
     h = result.t_final / result.n_steps
-    cot = (np.asarray(cot_points, dtype=float),)
-    (g_points,) = result.integrator.backward(rhs_vjp, result.stages, h, cot)
-    return g_points, g_mom, g_cp
+    (g_points,) = result.integrator.backward(rhs_vjp, result.stages, h, (cot,))
+    d = np.shape(control_points)[1]
+    return tuple(system.from_layout(g, d) for g in (g_points, g_mom, g_cp))
 
 
 def kernel_flow_jvp(
@@ -209,18 +220,21 @@ def kernel_flow_jvp(
     """
     if result.stages is None:
         raise ValueError("kernel_flow_jvp: kernel_flow must be called with keep_stages=True")
+    system = result.system or HamiltonianSystem(kernel)
     cp = np.asarray(control_points, dtype=float)
     mom = np.asarray(momenta, dtype=float)
     dm = np.zeros_like(mom) if d_momenta is None else np.asarray(d_momenta, dtype=float)
     dc = np.zeros_like(cp) if d_control_points is None else np.asarray(d_control_points, float)
-    x0 = result.stages[0][0][0]
+    x0 = result.points
     dx = np.zeros_like(x0) if d_points is None else np.asarray(d_points, dtype=float)
+    cp, mom, dc, dm, dx = system.to_layout(cp, mom, dc, dm, dx)
 
     def rhs_jvp(state, tan):
-        return (kernel.convolve_jvp(state[0], cp, mom, tan[0], dc, dm),)
+        return (system.velocity_jvp(state[0], cp, mom, tan[0], dc, dm),)
 
     h = result.t_final / result.n_steps
-    return result.integrator.forward(rhs_jvp, result.stages, h, (dx,))[0]
+    out = result.integrator.forward(rhs_jvp, result.stages, h, (dx,))[0]
+    return system.from_layout(out, x0.shape[1])
 
 
 @dataclass(frozen=True)
