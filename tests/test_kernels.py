@@ -197,3 +197,30 @@ def test_idle_openmp_threads_spin_briefly_unless_the_user_chose(user_value):
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == expected
+
+
+@pytest.mark.skipif(not numba_available(), reason="the compiled solve needs numba")
+@pytest.mark.parametrize("n, m", [(1, 3), (9, 3), (13, 3), (9, 2), (6, 4)])
+def test_compiled_triangular_solves_keep_the_textbook_order_bit_for_bit(n, m):
+    """Blocked or not, each element sees its subtractions in the order of plain substitution."""
+    from manifolds.lddmm.kernels_numba import solve_lower
+
+    rng = np.random.default_rng(n * 10 + m)
+    a = rng.normal(size=(n, n))
+    chol = np.ascontiguousarray(np.linalg.cholesky(a @ a.T + n * np.eye(n)))
+    rhs = rng.normal(size=(n, m))
+    forward, backward = np.empty_like(rhs), np.empty_like(rhs)
+    for i in range(n):  # L X = B
+        for r in range(m):
+            acc = rhs[i, r]
+            for j in range(i):
+                acc -= chol[i, j] * forward[j, r]
+            forward[i, r] = acc / chol[i, i]
+    for i in range(n - 1, -1, -1):  # L^T X = B
+        for r in range(m):
+            acc = rhs[i, r]
+            for j in range(n - 1, i, -1):
+                acc -= chol[j, i] * backward[j, r]
+            backward[i, r] = acc / chol[i, i]
+    np.testing.assert_array_equal(solve_lower(chol, rhs), forward)
+    np.testing.assert_array_equal(solve_lower(chol, rhs, transpose=True), backward)

@@ -29,6 +29,7 @@ from ..kernels.numba_primitives import (
     to_soa,
     use_parallel,
 )
+from .triangular_solve_numba import solve_lower
 
 __all__ = [
     "convolve",
@@ -258,54 +259,3 @@ def convolve_vjp(x, c, mom, cot, inv_s2):
     fn = _cvjp_par if par else _cvjp_ser
     fn(to_soa(x), to_soa(c), to_soa(mom), to_soa(cot), float(inv_s2), g_x, buf_c, buf_m)
     return from_soa(g_x, d), from_soa(buf_c.sum(axis=0), d), from_soa(buf_m.sum(axis=0), d)
-
-
-@njit(cache=True, nogil=True)
-def _solve_lower(chol, rhs, transpose, out):  # pragma: no cover - compiled
-    n, m = rhs.shape
-    for i in range(n):
-        for r in range(m):
-            out[i, r] = rhs[i, r]
-    if not transpose:  # L X = B, rows of L in order
-        for i in range(n):
-            for j in range(i):
-                lij = chol[i, j]
-                for r in range(m):
-                    out[i, r] -= lij * out[j, r]
-            for r in range(m):
-                out[i, r] /= chol[i, i]
-    else:  # L^T X = B, column-oriented so that rows of L are read contiguously
-        for i in range(n - 1, -1, -1):
-            for r in range(m):
-                out[i, r] /= chol[i, i]
-            for j in range(i):
-                lij = chol[i, j]
-                for r in range(m):
-                    out[j, r] -= lij * out[i, r]
-
-
-def solve_lower(chol: np.ndarray, rhs: np.ndarray, transpose: bool = False) -> np.ndarray:
-    """Solve ``L X = B`` (or ``L^T X = B``) with a lower-triangular ``L``, single-threaded.
-
-    A serial loop with a fixed summation order: unlike a threaded BLAS ``trsm``
-    it neither competes with the kernel threads nor depends on the thread count.
-
-    Parameters
-    ----------
-    chol : array, shape ``(n, n)``, C-contiguous lower triangle (upper part ignored)
-    rhs : array, shape ``(n, m)``
-    transpose : bool
-
-    Returns
-    -------
-    array, shape ``(n, m)``
-    """
-    chol = np.ascontiguousarray(chol, dtype=np.float64)
-    rhs = np.ascontiguousarray(rhs, dtype=np.float64)
-    if chol.ndim != 2 or chol.shape[0] != chol.shape[1] or rhs.shape[0] != chol.shape[0]:
-        raise ValueError(
-            f"kernels_numba.solve_lower: shapes {chol.shape} and {rhs.shape} do not match"
-        )
-    out = np.empty_like(rhs)
-    _solve_lower(chol, rhs, bool(transpose), out)
-    return out
