@@ -5,8 +5,9 @@
 threaded BLAS ``trsm``, the loops neither compete with the kernel threads nor depend on
 the thread count, and every element sees its subtractions in the same order, so the
 results are bitwise the same however the loops are arranged. The forward substitution
-of three right-hand sides (3-D momenta) runs four rows at a time with twelve
-independent accumulators; the others go row by row.
+and the back substitution of three right-hand sides (3-D momenta) run four rows at a
+time (twelve independent accumulators, or one pass over the rows below a block); the
+others go row by row.
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ def _solve_lower(chol, rhs, transpose, out):  # pragma: no cover - compiled
                     out[i, r] -= lij * out[j, r]
             for r in range(m):
                 out[i, r] /= chol[i, i]
+    elif m == 3:
+        _backward_rows3(chol, out)
     else:  # L^T X = B, column-oriented so that rows of L are read contiguously
         for i in range(n - 1, -1, -1):
             for r in range(m):
@@ -89,6 +92,42 @@ def _forward_rows3(chol, out):  # pragma: no cover - compiled
                 out[i, r] -= lij * out[j, r]
         for r in range(3):
             out[i, r] /= chol[i, i]
+
+
+@njit(cache=True, nogil=True)
+def _backward_rows3(chol, out):  # pragma: no cover - compiled
+    """``L^T X = B`` in place for 3 columns: four rows of ``L`` at a time, from the last,
+    in the same order per element (for each row ``j``, the rows ``i > j`` from the last)."""
+    top = out.shape[0]  # rows >= top are solved
+    while top >= 4:
+        i0 = top - 4
+        for i in range(top - 1, i0 - 1, -1):  # the block's own triangle
+            d = chol[i, i]
+            out[i, 0] /= d
+            out[i, 1] /= d
+            out[i, 2] /= d
+            for j in range(i0, i):
+                lij = chol[i, j]
+                out[j, 0] -= lij * out[i, 0]
+                out[j, 1] -= lij * out[i, 1]
+                out[j, 2] -= lij * out[i, 2]
+        x30, x31, x32 = out[i0 + 3, 0], out[i0 + 3, 1], out[i0 + 3, 2]
+        x20, x21, x22 = out[i0 + 2, 0], out[i0 + 2, 1], out[i0 + 2, 2]
+        x10, x11, x12 = out[i0 + 1, 0], out[i0 + 1, 1], out[i0 + 1, 2]
+        x00, x01, x02 = out[i0, 0], out[i0, 1], out[i0, 2]
+        for j in range(i0):  # the rows below the block, the block's rows from the last
+            l3, l2, l1, l0 = chol[i0 + 3, j], chol[i0 + 2, j], chol[i0 + 1, j], chol[i0, j]
+            out[j, 0] = out[j, 0] - l3 * x30 - l2 * x20 - l1 * x10 - l0 * x00
+            out[j, 1] = out[j, 1] - l3 * x31 - l2 * x21 - l1 * x11 - l0 * x01
+            out[j, 2] = out[j, 2] - l3 * x32 - l2 * x22 - l1 * x12 - l0 * x02
+        top = i0
+    for i in range(top - 1, -1, -1):  # the first rows
+        for r in range(3):
+            out[i, r] /= chol[i, i]
+        for j in range(i):
+            lij = chol[i, j]
+            for r in range(3):
+                out[j, r] -= lij * out[i, r]
 
 
 def solve_lower(chol: np.ndarray, rhs: np.ndarray, transpose: bool = False) -> np.ndarray:
