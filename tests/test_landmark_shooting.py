@@ -96,3 +96,36 @@ def test_shooting_vjp_needs_stages_and_unknown_integrator_raises():
         get_integrator("leapfrog")
     with pytest.raises(ValueError, match="n_steps"):
         shoot(kernel, c, mu, "euler", 0)
+
+
+def test_a_registered_hamiltonian_system_is_the_one_the_shooting_integrates():
+    """``register_system`` replaces a backend's system; the shot is unchanged by a subclass."""
+    from manifolds.lddmm.hamiltonian_system import (
+        _SYSTEMS,
+        HamiltonianSystem,
+        hamiltonian_system,
+        register_system,
+    )
+
+    calls = []
+
+    class Counting(HamiltonianSystem):
+        def rhs(self, state):
+            calls.append(len(state))
+            return super().rhs(state)
+
+    kernel = GaussianKernel(0.7, backend="numpy")
+    rng = np.random.default_rng(3)
+    c, mu, x = rng.normal(size=(5, 2)), 0.1 * rng.normal(size=(5, 2)), rng.normal(size=(7, 2))
+    before = shoot(kernel, c, mu, "rk2", 4, points=x)
+    previous = _SYSTEMS["numpy"]
+    register_system("numpy", Counting)
+    try:
+        assert isinstance(hamiltonian_system(kernel), Counting)
+        after = shoot(kernel, c, mu, "rk2", 4, points=x)
+    finally:
+        register_system("numpy", previous)
+    assert calls == [3] * 8  # 4 steps of 2 stages, on (c, mu, x)
+    np.testing.assert_array_equal(after.points, before.points)
+    with pytest.raises(TypeError, match="register_system: system"):
+        register_system("numpy", object)

@@ -18,6 +18,11 @@ class SolverProblem(Protocol):
     :meth:`value_and_gradient`; the stopping rule calls :meth:`shape` and
     :meth:`predicted_change`. Optional methods (``jvp``, ``vjp``,
     ``gauss_newton_product``, ``refresh_metric``) serve second-order solvers.
+
+    Solvers ask :meth:`value_and_gradient` again at an iterate already evaluated
+    (L-BFGS-B at every accepted iterate, for the stopping rule), and call it
+    directly: a costly problem keeps its latest evaluation
+    (:class:`~manifolds.lddmm.registration_problem.RegistrationProblem` does).
     """
 
     size: int
