@@ -91,8 +91,8 @@ def test_analyze_writes_tables_maps_and_figures(default_study, tmp_path):
     k = data.cohort.n_vertices
     with open(outcome.paths["vertices.csv"]) as fh:
         rows = list(csv.DictReader(fh))
-    assert len(rows) == len(outcome.comparisons) * 3 * k
-    assert {r["test"] for r in rows} == {"hotelling_t2", "normal_t", "strain_t"}
+    assert len(rows) == len(outcome.comparisons) * 4 * k
+    assert {r["test"] for r in rows} == {"hotelling_t2", "normal_t", "strain_t", "wall_motion_t"}
     assert len(outcome.scores) == len(outcome.comparisons) == 4  # none + three transports
     ladder = next(s for s in outcome.scores if s.method == "pole_ladder_residual")
     assert ladder.power >= 0.8

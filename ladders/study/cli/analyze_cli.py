@@ -46,11 +46,13 @@ def add_analyze_parser(sub) -> None:
         help="compare two groups' transported motion on the atlas (per vertex, global, classifier)",
         description=(
             "Compare the transported motion of two groups of subjects in a study's results: "
-            "per atlas vertex, Hotelling T^2 of the displacement T' - T and t of the area "
-            "strain with the family-wise error controlled by permutations of the group "
-            "labels; a global permutation test on the first PCA scores; a cross-validated "
-            "classifier's AUC. Every transport and alpha^2 of the study is analysed, and the "
-            "motion without transport (S' - S). With --truth, every transport is scored "
+            "per atlas vertex, Hotelling T^2 of the displacement T' - T, t of its component "
+            "along the atlas's normal, t of the area strain and t of the normal wall motion "
+            "(the signed distance along the atlas's normal to the surface T'), with the "
+            "family-wise error controlled by permutations of the group labels; a global "
+            "permutation test on the first PCA scores; a cross-validated classifier's AUC. "
+            "Every transport and alpha^2 of the study is analysed, and the motion without "
+            "transport (S' - S). With --truth, every transport is scored "
             "against the planted region (power, Dice); with --null, the false-positive rate "
             "is measured on a study without the effect."
         ),
@@ -124,7 +126,8 @@ def run_analyze_command(args) -> int:
     print(
         f"{c.motion.label} ({c.motion.name}): {int(c.detected(args.alpha).sum())} vertices with a "
         f"different displacement, {int(c.detected(args.alpha, 'strain').sum())} with a different "
-        f"strain (FWER {args.alpha:g}); global p = {c.global_test.p_permutation:.2g}; "
+        f"strain, {int(c.detected(args.alpha, 'wall_motion').sum())} with a different normal "
+        f"wall motion (FWER {args.alpha:g}); global p = {c.global_test.p_permutation:.2g}; "
         f"AUC {c.classifier.auc:.2f} [{c.classifier.ci_low:.2f}, {c.classifier.ci_high:.2f}]"
     )
     folder = Path(outcome.paths["summary.md"]).parent

@@ -6,7 +6,9 @@ transported motion is compared between the groups (:func:`compare_groups`) and
 scored against the truth:
 
 * detection power: the fraction of the truly affected atlas vertices whose
-  displacement test is significant at a family-wise error of ``alpha``;
+  displacement test is significant at a family-wise error of ``alpha`` (and the
+  same for the tests of the normal component, the area strain and the normal
+  wall motion);
 * Dice of the detected region with the planted one;
 * the classifier's cross-validated AUC with its confidence interval;
 * under the null, the family-wise false-positive rate: the same test on a cohort
@@ -67,16 +69,21 @@ def null_false_positive_rate(
 
     ``motion`` holds subjects of one distribution; each repetition splits them at
     random into ``n_first`` and ``n - n_first`` subjects and runs the vertexwise
-    test with ``n_permutations`` permutations. The rate is the fraction of
+    test of ``quantity`` (``"displacement"``, ``"strain"`` or ``"wall_motion"``)
+    with ``n_permutations`` permutations. The rate is the fraction of
     repetitions with at least one vertex below ``alpha`` (family-wise corrected).
     """
+    if quantity not in ("displacement", "strain", "wall_motion"):
+        raise ValueError(
+            f"quantity: expected 'displacement', 'strain' or 'wall_motion', got {quantity!r}"
+        )
     rng = check_rng(rng)
     n = len(motion.subjects)
     n_first = check_int(n_first, "n_first", minimum=3)
     if n - n_first < 3:
         raise CohortError(f"n_first: leaves {n - n_first} subjects in the second group, need >= 3")
     n_repetitions = check_int(n_repetitions, "n_repetitions", minimum=1)
-    data = motion.displacement if quantity == "displacement" else motion.strain
+    data = getattr(motion, quantity)
     hits = 0
     for _ in tqdm(range(n_repetitions), desc="null splits", disable=not progress, leave=False):
         labels = np.zeros(n, dtype=bool)
@@ -89,7 +96,13 @@ def null_false_positive_rate(
 
 @dataclass(frozen=True)
 class TransportScore:
-    """One row of the transport comparison: a motion scored against the planted truth."""
+    """One row of the transport comparison: a motion scored against the planted truth.
+
+    ``power`` and ``dice`` are those of the displacement test; ``strain_*``,
+    ``normal_*`` and ``wall_*`` those of the area-strain, normal-component and
+    normal-wall-motion tests (``wall_*`` last, None where not measured, so that the
+    columns before them keep their places).
+    """
 
     name: str
     method: str
@@ -111,6 +124,8 @@ class TransportScore:
     fwer: float | None = None
     fwer_low: float | None = None
     fwer_high: float | None = None
+    wall_power: float | None = None
+    wall_dice: float | None = None
 
 
 def _score(comparison: GroupComparison, affected, alpha, null: NullRate | None) -> TransportScore:
@@ -118,6 +133,7 @@ def _score(comparison: GroupComparison, affected, alpha, null: NullRate | None) 
     detected = comparison.detected(alpha, "displacement")
     strain = comparison.detected(alpha, "strain")
     normal = comparison.detected(alpha, "normal")
+    wall = comparison.detected(alpha, "wall_motion")
     c = comparison.classifier
     return TransportScore(
         m.name, m.method, m.label, m.deformation, m.alpha2,
@@ -128,6 +144,7 @@ def _score(comparison: GroupComparison, affected, alpha, null: NullRate | None) 
         None if null is None else null.rate,
         None if null is None else null.low,
         None if null is None else null.high,
+        wall_power=detection_power(wall, affected), wall_dice=dice(wall, affected),
     )  # fmt: skip
 
 
@@ -216,9 +233,9 @@ def _fmt(value, digits: int = 2) -> str:
 def scores_markdown(scores: list[TransportScore]) -> str:
     """A Markdown table of the scores (power, Dice, AUC [CI], null FWER [CI])."""
     lines = [
-        "| transport | alpha^2 | power | Dice | normal-motion power | strain power | "
-        "AUC [95 % CI] | global p | FWER under the null [95 % CI] |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| transport | alpha^2 | power | Dice | normal-motion power | wall-motion power | "
+        "strain power | AUC [95 % CI] | global p | FWER under the null [95 % CI] |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s in scores:
         alpha2 = "-" if s.alpha2 is None else f"{s.alpha2:g}"
@@ -228,7 +245,8 @@ def scores_markdown(scores: list[TransportScore]) -> str:
             name = f"{s.deformation.upper()} {s.label}"
         lines.append(
             f"| {name} | {alpha2} | "
-            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.normal_power)} | {_fmt(s.strain_power)} | "
+            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.normal_power)} | "
+            f"{_fmt(s.wall_power)} | {_fmt(s.strain_power)} | "
             f"{s.auc:.2f} [{s.auc_low:.2f}, {s.auc_high:.2f}] | {s.global_p:.2g} | {fwer} |"
         )
     return "\n".join(lines) + "\n"

@@ -2,7 +2,8 @@
 
 :func:`analyze` reads a study's output folder, checks the groups table against it
 before any computation, compares the two groups for every transport and
-``alpha^2`` (:func:`~.group_comparison.compare_groups`), scores every transport
+``alpha^2`` (:func:`~.group_comparison.compare_groups`: per vertex, the displacement,
+its normal component, the area strain and the normal wall motion), scores every transport
 against a planted truth when one is given (:func:`~.against_truth.score_transports`)
 and writes the outputs (:mod:`.analysis_outputs`).
 """

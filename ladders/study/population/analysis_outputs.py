@@ -4,6 +4,7 @@ Layout of an analysis folder::
 
     vertices.csv        one row per motion, test and atlas vertex (statistic, p-values)
     tests.csv           one row per motion: group sizes, detections, global test, AUC
+                        (the wall-motion detections in the last column)
     scores.csv          with a planted truth: power, Dice, AUC, FWER under the null
     summary.md          the above in words and tables
     maps/<motion>.vtu   the atlas with the group means and the test maps (ParaView)
@@ -39,7 +40,12 @@ __all__ = [
     "write_analysis",
 ]
 
-_TESTS = {"displacement": "hotelling_t2", "normal": "normal_t", "strain": "strain_t"}
+_TESTS = {
+    "displacement": "hotelling_t2",
+    "normal": "normal_t",
+    "strain": "strain_t",
+    "wall_motion": "wall_motion_t",
+}
 
 
 def _file_name(comparison: GroupComparison) -> str:
@@ -93,6 +99,7 @@ def _test_rows(comparisons, alpha):
             "auc_ci_low": c.classifier.ci_low,
             "auc_ci_high": c.classifier.ci_high,
             "normalization": c.normalization or "none",
+            "wall_motion_vertices_significant": int(c.detected(alpha, "wall_motion").sum()),
         }
 
 
@@ -123,16 +130,17 @@ def summary_markdown(
         header,
         f"Groups: {c0.groups[0]} ({int(c0.labels.sum())}) against {c0.groups[1]} "
         f"({int((~c0.labels).sum())}). Per atlas vertex: Hotelling T² of the displacement "
-        f"T' − T, t of its component along the atlas's normal and t of the local area strain, "
-        f"family-wise error controlled at {alpha:g} by "
+        f"T' − T, t of its component along the atlas's normal, t of the local area strain "
+        f"and t of the normal wall motion (the signed distance along the atlas's normal to "
+        f"the surface T'), family-wise error controlled at {alpha:g} by "
         f"{n:,} permutations of the group labels (maximum over the vertices). Global test: "
         f"Hotelling T² of the first PCA scores of the displacements, by permutation. "
         "Classifier: PCA and logistic regression, stratified cross-validation, AUC with a "
         "bootstrap interval over the subjects.",
         "",
-        "| motion | vertices found (displacement) | (normal motion) | (strain) | global p | "
-        "AUC [95 % CI] |",
-        "|---|---|---|---|---|---|",
+        "| motion | vertices found (displacement) | (normal motion) | (wall motion) | (strain) | "
+        "global p | AUC [95 % CI] |",
+        "|---|---|---|---|---|---|---|",
     ]
     k = c0.displacement.statistic.size
     for row, c in zip(_test_rows(comparisons, alpha), comparisons):
@@ -140,13 +148,15 @@ def summary_markdown(
             f"| {c.motion.label}{'' if c.motion.alpha2 is None else f', α² = {c.motion.alpha2:g}'}"
             f" ({c.motion.deformation}) | {row['displacement_vertices_significant']} / {k} | "
             f"{row['normal_vertices_significant']} / {k} | "
+            f"{row['wall_motion_vertices_significant']} / {k} | "
             f"{row['strain_vertices_significant']} / {k} | {row['global_p_permutation']:.2g} | "
             f"{row['auc']:.2f} [{row['auc_ci_low']:.2f}, {row['auc_ci_high']:.2f}] |"
         )
     if scores:
         lines += ["", "## Against the planted truth", "", truth or "", "", scores_markdown(scores)]
         lines.append(
-            "Power: fraction of the planted vertices found (displacement test); Dice of the "
+            "Power: fraction of the planted vertices found (displacement test; the normal-"
+            "motion, wall-motion and strain powers: by those tests); Dice of the "
             "found region with the planted one; FWER: fraction of random splits of a cohort "
             "without the effect in which any vertex was found, with its exact binomial interval."
         )
@@ -164,6 +174,8 @@ def write_maps(comparisons: list[GroupComparison], folder: Path, weight=None, al
             "mean_displacement_difference": c.group_mean(0) - c.group_mean(1),
             f"mean_strain_{c.groups[0]}": c.group_mean(0, "strain"),
             f"mean_strain_{c.groups[1]}": c.group_mean(1, "strain"),
+            f"mean_wall_motion_{c.groups[0]}": c.group_mean(0, "wall_motion"),
+            f"mean_wall_motion_{c.groups[1]}": c.group_mean(1, "wall_motion"),
             "hotelling_t2": c.displacement.statistic,
             "hotelling_p_fwer": c.displacement.p_fwer,
             "hotelling_p_uncorrected": c.displacement.p_uncorrected,
@@ -171,6 +183,9 @@ def write_maps(comparisons: list[GroupComparison], folder: Path, weight=None, al
             "normal_t": c.normal.statistic,
             "normal_p_fwer": c.normal.p_fwer,
             "normal_significant": (c.normal.p_fwer < alpha).astype(float),
+            "wall_motion_t": c.wall_motion.statistic,
+            "wall_motion_p_fwer": c.wall_motion.p_fwer,
+            "wall_motion_significant": (c.wall_motion.p_fwer < alpha).astype(float),
             "strain_t": c.strain.statistic,
             "strain_p_fwer": c.strain.p_fwer,
             "strain_significant": (c.strain.p_fwer < alpha).astype(float),
@@ -215,13 +230,14 @@ def plot_group_means(c: GroupComparison, path: Path) -> Path:
 
 
 def plot_pvalue_map(c: GroupComparison, path: Path, weight=None, alpha: float = 0.05) -> Path:
-    """``-log10`` of the corrected p-values of both tests on the atlas (and the planted region)."""
+    """``-log10`` of the corrected p-values of every vertex test on the atlas (and the truth)."""
     import matplotlib.pyplot as plt
 
     m = c.motion
     panels = [
         ("displacement (Hotelling T²)", -np.log10(c.displacement.p_fwer)),
         ("normal motion (t)", -np.log10(c.normal.p_fwer)),
+        ("normal wall motion (t)", -np.log10(c.wall_motion.p_fwer)),
         ("area strain (t)", -np.log10(c.strain.p_fwer)),
     ]
     if weight is not None:

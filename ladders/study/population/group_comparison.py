@@ -7,10 +7,12 @@ subjects' groups, and runs:
 * per vertex, a Hotelling ``T^2`` test of the displacement vectors, a ``t`` test of
   their component along the atlas's outward normal (the motion a surface shows: a
   correspondence of segmentations lets vertices slide along the surface, which adds
-  noise to the tangential components only) and a ``t`` test of the local area
-  strain, each with its family-wise error controlled by
-  permuting the group labels (maximum statistic over the vertices,
-  :func:`ladders.statistics.vertexwise_test`);
+  noise to the tangential components only), a ``t`` test of the local area
+  strain and a ``t`` test of the normal wall motion (the signed distance along the
+  atlas's normal from ``T`` to the surface ``T'``,
+  :attr:`~.transported_motion.TransportedMotion.wall_motion`), each with its
+  family-wise error controlled by permuting the group labels (maximum statistic
+  over the vertices, :func:`ladders.statistics.vertexwise_test`);
 * a tangent PCA of the displacements at the atlas (the flat metric of the point
   distribution model, :func:`ladders.statistics.tangent_pca`) and a global
   permutation test on the first ``n_components`` scores
@@ -52,10 +54,18 @@ from ..errors import CohortError
 from ..volume import enclosed_volume
 from .transported_motion import NO_TRANSPORT, TransportedMotion
 
-__all__ = ["NORMALIZATIONS", "GroupComparison", "compare_groups", "normalize_motion"]
+__all__ = [
+    "NORMALIZATIONS",
+    "VERTEX_TESTS",
+    "GroupComparison",
+    "compare_groups",
+    "normalize_motion",
+]
 
 #: Amplitude normalisations of the transported displacements.
 NORMALIZATIONS = (None, "volume")
+#: The per-vertex tests of a :class:`GroupComparison` (its attributes of those names).
+VERTEX_TESTS = ("displacement", "normal", "strain", "wall_motion")
 
 
 @dataclass(frozen=True)
@@ -76,6 +86,10 @@ class GroupComparison:
         ``t`` of the local area strain at every vertex (positive: larger in the first group).
     normal : VertexwiseTest
         ``t`` of the displacement's component along the atlas's outward vertex normal.
+    wall_motion : VertexwiseTest
+        ``t`` of the normal wall motion: the signed distance along the atlas's outward
+        normal from ``T`` to the surface ``T'`` (positive: the first group's wall moves
+        farther outward, or less far inward).
     pca : TangentPCA
         Tangent PCA of the displacements at the atlas (flat metric).
     global_test : GlobalTest
@@ -93,6 +107,7 @@ class GroupComparison:
     displacement: VertexwiseTest
     strain: VertexwiseTest
     normal: VertexwiseTest
+    wall_motion: VertexwiseTest
     pca: TangentPCA
     global_test: GlobalTest
     classifier: ClassifierResult
@@ -100,14 +115,25 @@ class GroupComparison:
     scales: np.ndarray | None = None
 
     def group_mean(self, which: int, quantity: str = "displacement") -> np.ndarray:
-        """Mean displacement ``(k, 3)`` or strain ``(k,)`` of group ``which`` (0 or 1)."""
-        data = self.motion.displacement if quantity == "displacement" else self.motion.strain
+        """Mean displacement ``(k, 3)``, strain or wall motion ``(k,)`` of group ``which`` (0 or 1).
+
+        ``quantity`` is ``"displacement"``, ``"strain"`` or ``"wall_motion"``.
+        """
+        if which not in (0, 1):
+            raise ValueError(f"which: expected 0 or 1, got {which!r}")
+        if quantity not in ("displacement", "strain", "wall_motion"):
+            raise ValueError(
+                f"quantity: expected 'displacement', 'strain' or 'wall_motion', got {quantity!r}"
+            )
+        data = getattr(self.motion, quantity)
         mask = self.labels if which == 0 else ~self.labels
         return data[mask].mean(axis=0)
 
     def detected(self, alpha: float = 0.05, test: str = "displacement") -> np.ndarray:
         """Vertices whose family-wise corrected p-value is below ``alpha`` in ``test``
-        (``"displacement"``, ``"normal"`` or ``"strain"``)."""
+        (``"displacement"``, ``"normal"``, ``"strain"`` or ``"wall_motion"``)."""
+        if test not in VERTEX_TESTS:
+            raise ValueError(f"test: expected one of {VERTEX_TESTS}, got {test!r}")
         return getattr(self, test).p_fwer < alpha
 
 
@@ -143,6 +169,8 @@ def normalize_motion(
     TransportedMotion, ndarray of shape (n,)
         The motion with ``T' - T`` scaled by ``lambda_i`` such that
         ``V(T + lambda_i (T'_i - T)) / V(T) = V(S'_i) / V(S_i)``, and the scales.
+        Its area strain and its wall motion are those of the rescaled surfaces
+        ``T + lambda_i (T'_i - T)`` (the wall motion computed when first read).
         The motion without transport is returned unchanged (scales 1).
     """
     n = len(motion.subjects)
@@ -232,6 +260,7 @@ def compare_groups(
         motion, scales = normalize_motion(motion, volume_ratios)
     n = len(labels)
     n_components = min(n_components, n - 2)
+    wall_motion = motion.wall_motion  # computed before any draw (the slowest input)
     displacement = vertexwise_test(
         motion.displacement, labels, n_permutations, rng=rng, progress=progress
     )
@@ -249,7 +278,9 @@ def compare_groups(
         motion.displacement.reshape(n, -1), labels, n_splits=max(2, min(n_splits, smallest)),
         n_components=k, rng=rng,
     )  # fmt: skip
+    # drawn last, so that the other tests' draws are those of a comparison without it
+    wall = vertexwise_test(wall_motion, labels, n_permutations, rng=rng, progress=progress)
     return GroupComparison(
-        motion, labels, tuple(groups), displacement, strain, normal, pca, global_, classifier,
-        normalize, scales,
+        motion, labels, tuple(groups), displacement, strain, normal, wall, pca, global_,
+        classifier, normalize, scales,
     )  # fmt: skip

@@ -4,8 +4,9 @@ For every transport method of the study (the pole ladder with and without
 residuals, the fanning scheme or the SVF conjugation) and every ``alpha^2``, a
 :class:`TransportedMotion` stacks the subjects' transported motion on the atlas:
 the displacement ``T' - T`` of every atlas vertex, the local area strain from
-``T`` to ``T'`` and, where the transport gives a tangent vector of the space at
-``T``, its momenta at the atlas's control points and its residual. The method
+``T`` to ``T'``, the normal wall motion from ``T`` to ``T'`` (computed when first
+asked for, :attr:`TransportedMotion.wall_motion`) and, where the transport gives a
+tangent vector of the space at ``T``, its momenta at the atlas's control points and its residual. The method
 ``"none"`` is the motion without transport: each subject's own displacement
 ``S' - S`` and area strain, vertex by vertex (the meshes being in correspondence
 with the atlas), in the subject's frame.
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +30,7 @@ from ..meshes.mesh_io import read_mesh
 from ..running.result_codec import ResultSchemaError, decode
 from ..running.results import TRANSPORT_LABELS, FailedPair, PairResult, SubjectResults
 from ..running.runner import ATLAS_FILE
+from ..wall_motion import normal_wall_motion
 
 __all__ = [
     "NO_TRANSPORT",
@@ -36,11 +39,51 @@ __all__ = [
     "motions_from_results",
     "load_study_results",
     "load_transported_motion",
+    "wall_motion_on_atlas",
 ]
 
 #: The method name of the motion without transport (each subject's ``S' - S``).
 NO_TRANSPORT = "none"
 _LABELS = {**TRANSPORT_LABELS, NO_TRANSPORT: "no transport (S' - S of the corresponded meshes)"}
+
+
+def wall_motion_on_atlas(atlas, faces, displacement) -> tuple[np.ndarray, np.ndarray]:
+    """The normal wall motion from the atlas ``T`` to ``T + d`` of every displacement ``d``.
+
+    For each subject, :func:`~ladders.study.wall_motion.normal_wall_motion` from the
+    atlas to the surface ``T' = T + d`` with the atlas's faces: the signed distance
+    along the atlas's outward vertex normal from each atlas vertex to ``T'``.
+
+    Parameters
+    ----------
+    atlas : array, shape (k, 3)
+    faces : int array, shape (f, 3)
+    displacement : array, shape (n, k, 3)
+        ``T' - T`` per subject, in the atlas's unit.
+
+    Returns
+    -------
+    distance : ndarray, shape (n, k)
+        The signed normal wall motion (negative inward), in the atlas's unit.
+    hit : ndarray of bool, shape (n, k)
+        Whether the normal line met ``T'`` (elsewhere, e.g. past the rim of a surface
+        open at its base, the motion is that to the closest point of ``T'``).
+    """
+    atlas = np.asarray(atlas, dtype=float)
+    d = np.asarray(displacement, dtype=float)
+    if d.ndim != 3 or d.shape[1:] != atlas.shape or atlas.ndim != 2 or atlas.shape[1] != 3:
+        raise ValueError(
+            f"displacement: expected shape (n, {atlas.shape[0]}, 3) for an atlas of shape "
+            f"(k, 3), got {d.shape} with an atlas of shape {atlas.shape}"
+        )
+    if not np.all(np.isfinite(d)):
+        raise ValueError("displacement: expected finite values")
+    distance = np.empty(d.shape[:2])
+    hit = np.empty(d.shape[:2], dtype=bool)
+    for i, di in enumerate(d):
+        projection = normal_wall_motion(atlas, faces, atlas + di, faces)
+        distance[i], hit[i] = projection.distance, projection.hit
+    return distance, hit
 
 
 @dataclass(frozen=True)
@@ -71,6 +114,13 @@ class TransportedMotion:
         The registration settings of the study (``RegistrationSettings.as_dict()``).
     volume_ratio : ndarray, shape (n,), or None
         ``V(S') / V(S)`` of each subject (for the amplitude normalisation).
+
+    Notes
+    -----
+    :attr:`wall_motion` (and :attr:`wall_motion_hit`) are computed from ``atlas``,
+    ``faces`` and ``displacement`` when first read, then kept: a motion with another
+    displacement (a rescaled one, :func:`~.group_comparison.normalize_motion`) is a
+    new :class:`TransportedMotion` with its own wall motion.
     """
 
     method: str
@@ -91,6 +141,26 @@ class TransportedMotion:
         """What the method is, e.g. ``"pole ladder, with residuals"``."""
         return _LABELS.get(self.method, self.method)
 
+    @cached_property
+    def _wall(self) -> tuple[np.ndarray, np.ndarray]:
+        return wall_motion_on_atlas(self.atlas, self.faces, self.displacement)
+
+    @property
+    def wall_motion(self) -> np.ndarray:
+        """Normal wall motion ``(n, k)`` from the atlas ``T`` to ``T' = T + displacement``.
+
+        Per subject and atlas vertex, the signed distance along the atlas's outward
+        normal to the surface ``T'`` (same faces), negative inward
+        (:func:`wall_motion_on_atlas`). For ``"none"``, ``T'`` is the atlas moved by
+        the subject's own ``S' - S``.
+        """
+        return self._wall[0]
+
+    @property
+    def wall_motion_hit(self) -> np.ndarray:
+        """Whether each atlas vertex's normal line met ``T'``, ``(n, k)`` booleans."""
+        return self._wall[1]
+
     @property
     def name(self) -> str:
         """A short identifier: ``<deformation>/<method>/alpha2=<a>`` (``none`` alone)."""
@@ -109,11 +179,14 @@ class TransportedMotion:
         def take(a):
             return None if a is None else a[rows]
 
-        return TransportedMotion(
+        out = TransportedMotion(
             self.method, self.deformation, self.alpha2, tuple(subjects), self.atlas, self.faces,
             self.displacement[rows], self.strain[rows], take(self.momenta), take(self.residual),
             self.registration, take(self.volume_ratio),
         )  # fmt: skip
+        if "_wall" in self.__dict__:  # already computed: the rows of the same surfaces
+            out.__dict__["_wall"] = tuple(a[rows] for a in self._wall)
+        return out
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,183 @@
+"""Normal wall motion: how far each vertex of one surface moves along its normal to reach another.
+
+The motion a pair of surfaces (end-diastole, end-systole) shows is the motion
+across the wall: a surface carries no material landmark, so how the wall slid
+along itself is not in it. For each vertex ``x_i`` of the first mesh, with its
+outward unit normal ``n_i``, :func:`normal_wall_motion` casts the line
+``x_i + t n_i`` and keeps the intersection with the second surface nearest to
+``x_i`` (smallest ``|t|``) whose triangle faces the same way (outward normals in
+the same half-space: the near wall, not the opposite one), within
+``max_distance``. ``t`` is the signed normal wall motion (negative inward: a
+contracting ventricle has ``t < 0``), the intersection the vertex's normal
+projection onto the second surface. A vertex whose line meets no such triangle
+(e.g. past the rim of a surface open at its base) takes the closest point of the
+second surface instead, and is marked as such (``hit`` False).
+
+This is the centreline measure of regional wall motion of echocardiography and
+cine MRI, on a surface: ``symladders correspond`` uses the projection as the
+end-systolic correspondence of a subject (each corresponded ED vertex moved
+along its normal to the ES surface), and the group analysis tests ``t`` per
+atlas vertex (``wall_motion``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+
+from manifolds.data_terms.mesh_geometry import check_mesh
+
+from .volume import enclosed_volume
+
+__all__ = ["NormalProjection", "normal_wall_motion", "outward_vertex_normals"]
+
+
+def outward_vertex_normals(vertices, faces) -> np.ndarray:
+    """Unit vertex normals ``(k, 3)``, oriented outward (the enclosed volume positive)."""
+    normals = np.asarray(trimesh.Trimesh(vertices, faces, process=False).vertex_normals, float)
+    return normals if enclosed_volume(vertices, faces) >= 0 else -normals
+
+
+def _outward_face_normals(vertices, faces) -> np.ndarray:
+    normals = np.asarray(trimesh.Trimesh(vertices, faces, process=False).face_normals, float)
+    return normals if enclosed_volume(vertices, faces) >= 0 else -normals
+
+
+@dataclass(frozen=True)
+class NormalProjection:
+    """The normal projection of a mesh's vertices onto another surface.
+
+    Attributes
+    ----------
+    points : ndarray, shape (k, 3)
+        Each vertex moved along its normal onto the other surface (or to its closest
+        point there where ``hit`` is False).
+    distance : ndarray, shape (k,)
+        Signed motion along the outward normal, ``(points - vertices) . normals``.
+    hit : ndarray of bool, shape (k,)
+        Whether the normal line met the surface within ``max_distance``.
+    normals : ndarray, shape (k, 3)
+        The outward unit normals used.
+    """
+
+    points: np.ndarray
+    distance: np.ndarray
+    hit: np.ndarray
+    normals: np.ndarray
+
+    @property
+    def hit_fraction(self) -> float:
+        """Fraction of vertices whose normal line met the surface."""
+        return float(self.hit.mean()) if self.hit.size else 1.0
+
+
+def _candidates(origins, directions, centres, reach, max_distance, budget=200_000):
+    """``(line, triangle)`` pairs holding every triangle a line meets within ``max_distance``.
+
+    ``reach`` bounds the distance from a triangle's centre to any of its points (its
+    largest centre-corner distance, with a margin for the barycentric tolerance), so a
+    triangle met at ``t`` has its centre within ``reach`` of ``origin + t direction``.
+    That point is within half a spacing of one of the points sampled along the segment
+    ``|t| <= max_distance``: the triangle's centre lies in the ball of radius
+    ``spacing / 2 + reach`` around that sample. The pairs are those balls' contents (a
+    k-d tree of the samples against one of the centres), without repetition, sorted by
+    line then triangle. Exact: no triangle met within the segment is left out.
+    """
+    from scipy.spatial import cKDTree
+
+    n_samples = min(int(np.ceil(max_distance / reach)) + 1, 64)  # spacing ~ 2 reach
+    offsets = np.linspace(-max_distance, max_distance, n_samples)
+    radius = 0.5 * (offsets[1] - offsets[0]) + reach  # n_samples >= 2 as max_distance > 0
+    tree = cKDTree(centres)
+    n_tri = len(centres)
+    per_chunk = max(1, budget // n_samples)
+    codes = []
+    for s in range(0, len(origins), per_chunk):
+        o, d = origins[s : s + per_chunk], directions[s : s + per_chunk]
+        samples = (o[:, None, :] + offsets[None, :, None] * d[:, None, :]).reshape(-1, 3)
+        pairs = cKDTree(samples).sparse_distance_matrix(tree, radius, output_type="ndarray")
+        codes.append((pairs["i"] // n_samples + s) * n_tri + pairs["j"])
+    codes = np.unique(np.concatenate(codes)) if codes else np.zeros(0, np.int64)
+    return codes // n_tri, codes % n_tri
+
+
+def _line_hits(origins, directions, tv, tf, max_distance, chunk=200_000):
+    """Intersections of the lines ``origins + t directions`` with the triangles (Moller-Trumbore).
+
+    Candidate triangles of a line are those whose bounding sphere may meet the line
+    within ``|t| <= max_distance`` (:func:`_candidates`; intersections up to a
+    triangle's size beyond it may be returned too). Returns the line index, ``t``,
+    the point and the triangle of every intersection, sorted by line then triangle.
+    """
+    a, b, c = tv[tf[:, 0]], tv[tf[:, 1]], tv[tf[:, 2]]
+    centres = (a + b + c) / 3.0
+    radius = np.sqrt(np.max([((p - centres) ** 2).sum(1) for p in (a, b, c)], axis=0))
+    reach = float(radius.max()) * (1.0 + 1e-6) + 1e-12 * float(np.abs(tv).max(initial=1.0))
+    lines, tris = _candidates(origins, directions, centres, reach, max_distance)
+    out = []
+    for s in range(0, len(lines), chunk):
+        i, j = lines[s : s + chunk], tris[s : s + chunk]
+        o, d = origins[i], directions[i]
+        e1, e2 = b[j] - a[j], c[j] - a[j]
+        p = np.cross(d, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        ok = np.abs(det) > 1e-12 * np.einsum("ij,ij->i", e1, e1)
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s_vec = o - a[j]
+        u = np.einsum("ij,ij->i", s_vec, p) * inv
+        q = np.cross(s_vec, e1)
+        w = np.einsum("ij,ij->i", d, q) * inv
+        t = np.einsum("ij,ij->i", e2, q) * inv
+        eps = 1e-9
+        inside = ok & (u >= -eps) & (w >= -eps) & (u + w <= 1 + eps)
+        out.append((i[inside], t[inside], o[inside] + t[inside, None] * d[inside], j[inside]))
+    if not out:
+        return np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), np.zeros(0, int)
+    return tuple(np.concatenate(parts) for parts in zip(*out))
+
+
+def normal_wall_motion(
+    vertices, faces, target_vertices, target_faces, *, max_distance: float | None = None
+) -> NormalProjection:
+    """Move every vertex of ``(vertices, faces)`` along its normal onto the target (see module).
+
+    Parameters
+    ----------
+    vertices, faces : arrays ``(k, 3)``, ``(f, 3)``
+        The moving surface (e.g. a corresponded end-diastole); its normals are used.
+    target_vertices, target_faces : arrays ``(m, 3)``, ``(g, 3)``
+        The surface reached (e.g. end-systole), any triangulation, same frame and unit.
+    max_distance : float, optional
+        Ignore intersections farther than this (default: a fifth of the target's
+        bounding-box diagonal).
+
+    Returns
+    -------
+    NormalProjection
+    """
+    v, f = check_mesh(vertices, faces, "normal_wall_motion: mesh")
+    tv, tf = check_mesh(target_vertices, target_faces, "normal_wall_motion: target")
+    if max_distance is None:
+        max_distance = 0.2 * float(np.linalg.norm(tv.max(0) - tv.min(0)))
+    elif not (np.isfinite(max_distance) and max_distance > 0):
+        raise ValueError(f"normal_wall_motion: max_distance: expected > 0, got {max_distance}")
+    normals = outward_vertex_normals(v, f)
+    target = trimesh.Trimesh(tv, tf, process=False)
+    target_normals = _outward_face_normals(tv, tf)
+    vertex, t, loc, tri = _line_hits(v, normals, tv, tf, max_distance)
+    facing = np.einsum("ij,ij->i", target_normals[tri], normals[vertex]) > 0
+    keep = facing & (np.abs(t) <= max_distance)
+    vertex, loc, dist = vertex[keep], loc[keep], np.abs(t[keep])
+    order = np.lexsort((dist, vertex))  # by vertex, the nearest hit first (stable on ties)
+    nearest = order[np.unique(vertex[order], return_index=True)[1]]
+    hit = np.zeros(len(v), dtype=bool)
+    points = np.zeros((len(v), 3))
+    hit[vertex[nearest]] = True
+    points[vertex[nearest]] = loc[nearest]
+    if not hit.all():
+        closest, _, _ = trimesh.proximity.closest_point(target, v[~hit])
+        points[~hit] = closest
+    distance = np.einsum("ij,ij->i", points - v, normals)
+    return NormalProjection(points, distance, hit, normals)
