@@ -86,7 +86,11 @@ def add_mesh_parser(sub) -> None:
             "<subject>_ed.<ext>, <subject>_es.<ext> with a provenance record each (.json), "
             "read by 'symladders correspond' (and then 'symladders study'), and meshing.csv. "
             "A failing image is recorded with its reason and the others finish (exit 1); a "
-            "rerun skips the meshes already made from the same bytes and settings."
+            "rerun skips the meshes already made from the same bytes and settings. With "
+            "--rv-label, the apex, base-plane centre and septal point of every mesh are found "
+            "(the septum faces the right ventricle) and OUTPUT gets landmarks.csv (one row "
+            "per subject, from its ED mesh), which 'symladders correspond' and 'symladders atlas' "
+            "read."
         ),
         formatter_class=DefaultsFormatter,
     )
@@ -109,6 +113,9 @@ def add_mesh_parser(sub) -> None:
     p.add_argument("--cut-margin", type=_nonnegative_float, default=0.5,
                    help="move the cut plane this many voxel widths against its normal, so that "
                         "the lid a label makes at the valve plane goes (0: cut at the plane)")  # fmt: skip
+    p.add_argument("--rv-label", type=nonnegative_int, default=None, metavar="INT",
+                   help="the right ventricle's label: find each mesh's apex, base-plane centre "
+                        "and septal point and write landmarks.csv (default: no landmarks)")  # fmt: skip
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
     p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -122,6 +129,11 @@ def run_mesh_command(args) -> int:
     missing = [p for p in args.images if not p.is_file()]
     if missing:
         raise UsageError(f"symladders mesh: error: no such file: {missing[0]}")
+    if args.rv_label is not None and args.rv_label == args.label:
+        raise UsageError(
+            f"symladders mesh: error: --rv-label {args.rv_label}: the right ventricle's label "
+            "must differ from --label (the left ventricle's)"
+        )
     planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
     try:
         settings = MeshingSettings(
@@ -132,6 +144,7 @@ def run_mesh_command(args) -> int:
         outcome = mesh_label_images(
             args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,
             progress=not args.no_progress, ext=args.ext, cut_planes=planes,
+            rv_label=args.rv_label,
         )  # fmt: skip
     except (ImageError, ValueError) as exc:
         raise UsageError(f"symladders mesh: error: {exc}") from None
@@ -143,6 +156,14 @@ def run_mesh_command(args) -> int:
     )
     for r in done:
         print(f"  {r['mesh']}: {r['report']}")
+    if outcome.landmarks_file is not None:
+        from ..preparation.landmarks import read_landmarks
+
+        table = read_landmarks(outcome.landmarks_file)
+        print(
+            f"symladders mesh: landmarks of {len(table)} subject(s) (apex, base, septum, from "
+            f"the ED meshes) in {outcome.landmarks_file}"
+        )
     for r in outcome.failed:
         print(f"symladders mesh: failed: {r['error']}", file=sys.stderr)
     return 1 if outcome.failed else 0

@@ -7,12 +7,17 @@
   report (:func:`extract_surface`, :class:`MeshingSettings`);
 - :mod:`.mesh_images`: a batch of images to a folder the study reads, resumable,
   with provenance (:func:`mesh_label_images`);
+- :mod:`.septum`: the landmarks of a meshed left ventricle, its septum placed by
+  the right ventricle's label (:func:`landmarks_from_labels`);
 - :mod:`.voxelize`: label images of known surfaces, the ground truth
-  (:func:`voxelize`, :func:`short_axis_affine`, :func:`write_label_image`).
+  (:func:`voxelize`, :func:`short_axis_affine`, :func:`write_label_image`), and
+  :mod:`.rv_label`: a right-ventricle label beside them (:func:`add_rv_label`).
 """
 
 from .label_images import IMAGE_SUFFIXES, ImageError, LabelImage, image_stem, read_label_image
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
+from .rv_label import add_rv_label, voxel_centres
+from .septum import label_centroid, landmarks_from_labels, lv_apex_and_base
 from .surface_extraction import MeshingSettings, SurfaceReport, cut_at_plane, extract_surface
 from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
 
@@ -35,4 +40,9 @@ __all__ = [
     "short_axis_affine",
     "voxelize",
     "write_label_image",
+    "add_rv_label",
+    "voxel_centres",
+    "label_centroid",
+    "landmarks_from_labels",
+    "lv_apex_and_base",
 ]

@@ -15,6 +15,19 @@ settings and the extraction report); a rerun skips the meshes whose record match
 not a label image, 4-D without a frame, frame out of range, no or a singular affine,
 the two frames of a subject on different grids) is recorded with its reason in
 ``meshing.csv`` and the others go on.
+
+With ``rv_label`` (a right-ventricle label in the same images), each mesh also gets
+its anatomical landmarks, apex, base-plane centre and septal point
+(:func:`~.septum.landmarks_from_labels`), in its provenance record; the output folder
+gets :data:`~ladders.study.preparation.landmarks.LANDMARKS_FILE` (``landmarks.csv``),
+one row per subject from its end-diastolic mesh (``<subject>_ed<ext>``, the subject
+named as ``symladders correspond`` names it): the meshes of this run, and those an
+earlier run left in the folder with landmarks in their records (so that images meshed
+in several runs, e.g. one subject at a time, make one table). An image whose
+landmarks cannot be found (the RV label absent, its centroid on the LV's long axis)
+fails like any other: no new mesh, its reason in ``meshing.csv``, no row in the
+table. A rerun reuses a mesh only when its record has the landmarks of the same RV
+label.
 """
 
 from __future__ import annotations
@@ -31,8 +44,10 @@ import numpy as np
 from ..batch import run_batch
 from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
+from ..preparation.landmarks import LANDMARKS_FILE, Landmarks, write_landmarks
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
-from .surface_extraction import MeshingSettings, extract_surface
+from .septum import landmarks_from_labels
+from .surface_extraction import MeshingSettings, _shifted_plane, extract_surface
 
 __all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images", "REPORT_FILE"]
 
@@ -53,15 +68,31 @@ class MeshingTask:
 
 @dataclass
 class MeshingOutcome:
-    """What :func:`mesh_label_images` did: one record per mesh, in order."""
+    """What :func:`mesh_label_images` did: one record per mesh, in order.
+
+    Attributes
+    ----------
+    folder : Path
+    records : list of dict
+        ``source``, ``frame``, ``mesh``, ``status`` (ok, skipped, failed), ``error``,
+        ``report`` and ``landmarks`` (rows apex, base, septum as nested lists, or None).
+    landmarks_file : Path or None
+        The landmark table written (with ``rv_label``), else None.
+    """
 
     folder: Path
     records: list = field(default_factory=list)
+    landmarks_file: Path | None = None
 
     @property
     def failed(self) -> list:
         """The records of the meshes that could not be made."""
         return [r for r in self.records if r["status"] == "failed"]
+
+    @property
+    def landmarks(self) -> dict:
+        """``{subject: Landmarks}`` of the end-diastolic meshes made or reused by this run."""
+        return _ed_landmarks(self.records)
 
 
 def _subject_phase(stem: str) -> tuple[str, str | None]:
@@ -119,17 +150,67 @@ def plan_meshing(
     return tasks
 
 
-def _record_matches(record_path: Path, sha: str, task: MeshingTask, label: int, settings) -> bool:
+def _ed_landmarks(records: list) -> dict:
+    """``{subject: Landmarks}`` of the records of end-diastolic meshes that have landmarks."""
+    table = {}
+    for r in records:
+        subject, phase = _subject_phase(Path(r["mesh"]).stem)
+        if r["status"] != "failed" and phase == "ed" and r.get("landmarks") is not None:
+            table[subject] = Landmarks.from_array(r["landmarks"])
+    return table
+
+
+def _folder_landmarks(folder: Path, ext: str, records: list) -> dict:
+    """``{subject: Landmarks}`` of every end-diastolic mesh of ``folder`` with landmarks.
+
+    This run's records first: its meshes made or reused, none for its failed images;
+    then the meshes of the folder this run did not touch (an earlier run on other
+    images), from their provenance records.
+    """
+    table = _ed_landmarks(records)
+    touched = {r["mesh"] for r in records}
+    for mesh in sorted(folder.glob(f"*{ext}")):
+        subject, phase = _subject_phase(mesh.stem)
+        if phase != "ed" or mesh.name in touched or subject in table:
+            continue
+        try:
+            record = json.loads(mesh.with_suffix(".json").read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        landmarks = _landmarks_of(record) if isinstance(record, dict) else None
+        if landmarks is not None:
+            table[subject] = Landmarks.from_array(landmarks)
+    return dict(sorted(table.items()))
+
+
+def _matching_record(
+    record_path: Path, sha: str, task: MeshingTask, label: int, settings, rv_label: int | None
+) -> dict | None:
+    """The provenance record of a mesh made from the same inputs (None: none such)."""
     try:
         record = json.loads(record_path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return False
-    return (
+        return None
+    if not isinstance(record, dict):
+        return None
+    same = (
         record.get("sha256") == sha
         and record.get("label") == label
         and record.get("frame") == task.frame
         and record.get("settings") == settings.as_dict()
     )
+    if rv_label is not None:  # the landmarks of this RV label are part of the result
+        same = same and record.get("rv_label") == rv_label and _landmarks_of(record) is not None
+    return record if same else None
+
+
+def _landmarks_of(record: dict) -> list | None:
+    """The landmarks (3 x 3 nested list) of a provenance record, None if it has none usable."""
+    entry = record.get("landmarks")
+    try:
+        return Landmarks(*(entry[k] for k in ("apex", "base", "septum"))).as_array().tolist()
+    except (TypeError, KeyError, ValueError):
+        return None
 
 
 def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict | None):
@@ -144,12 +225,18 @@ def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict
 
 def _row(task: MeshingTask) -> dict:
     return {"source": str(task.source), "frame": task.frame, "mesh": task.output, "status": "ok",
-            "error": "", "report": ""}  # fmt: skip
+            "error": "", "report": "", "landmarks": None}  # fmt: skip
 
 
-def _meshed(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict | None:
+def _meshed(
+    task: MeshingTask,
+    label: int,
+    folder: Path,
+    settings: MeshingSettings,
+    rv_label: int | None = None,
+) -> dict | None:
     """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of an image meshed before
-    from the same file, frame, label and settings (None: it is meshed)."""
+    from the same file, frame, label, settings (and RV label) (None: it is meshed)."""
     out = folder / task.output
     if task.error or not out.is_file():
         return None
@@ -157,12 +244,20 @@ def _meshed(task: MeshingTask, label: int, folder: Path, settings: MeshingSettin
         sha = file_sha256(task.source)
     except OSError:
         return None  # the worker records why
-    if _record_matches(out.with_suffix(".json"), sha, task, label, settings):
-        return {**_row(task), "status": "skipped"}
-    return None
+    record = _matching_record(out.with_suffix(".json"), sha, task, label, settings, rv_label)
+    if record is None:
+        return None
+    landmarks = None if rv_label is None else _landmarks_of(record)
+    return {**_row(task), "status": "skipped", "landmarks": landmarks}
 
 
-def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSettings) -> dict:
+def _mesh_one(
+    task: MeshingTask,
+    label: int,
+    folder: Path,
+    settings: MeshingSettings,
+    rv_label: int | None = None,
+) -> dict:
     out = folder / task.output
     record_path = out.with_suffix(".json")
     row = _row(task)
@@ -172,6 +267,10 @@ def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSett
         sha = file_sha256(task.source)
         image = read_label_image(task.source, task.frame)
         vertices, faces, report = extract_surface(image, label, settings)
+        landmarks = None
+        if rv_label is not None:  # before writing: an image without landmarks gives no mesh
+            plane = None if settings.cut_plane is None else _shifted_plane(settings, image.affine)
+            landmarks = landmarks_from_labels(vertices, faces, image, rv_label, cut_plane=plane)
         write_mesh(out, vertices, faces, atomic=True)
         record = {
             "source": str(task.source.resolve()), "sha256": sha, "label": label,
@@ -179,8 +278,13 @@ def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSett
             "affine": np.asarray(image.affine).tolist(), "settings": settings.as_dict(),
             "report": report.as_dict(),
         }  # fmt: skip
+        if landmarks is not None:
+            record["rv_label"] = rv_label
+            record["landmarks"] = {"apex": landmarks.apex.tolist(), "base": landmarks.base.tolist(),
+                                   "septum": landmarks.septum.tolist()}  # fmt: skip
         atomic_write_text(record_path, json.dumps(record, indent=1))
-        return {**row, "report": report.describe()}
+        return {**row, "report": report.describe(),
+                "landmarks": None if landmarks is None else landmarks.as_array().tolist()}  # fmt: skip
     except (ImageError, ValueError, OSError) as exc:
         return {**row, "status": "failed", "error": str(exc)}
 
@@ -188,7 +292,7 @@ def _mesh_one(task: MeshingTask, label: int, folder: Path, settings: MeshingSett
 def _report_csv(records: list) -> str:
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=["source", "frame", "mesh", "status", "error", "report"],
-                            lineterminator="\n")  # fmt: skip
+                            lineterminator="\n", extrasaction="ignore")  # fmt: skip
     writer.writeheader()
     writer.writerows(records)
     return buf.getvalue()
@@ -204,6 +308,7 @@ def mesh_label_images(
     progress: bool = True,
     ext: str = ".vtk",
     cut_planes: dict | None = None,
+    rv_label: int | None = None,
 ) -> MeshingOutcome:
     """Mesh the label ``label`` of every image into ``output`` (see the module).
 
@@ -227,6 +332,9 @@ def mesh_label_images(
     cut_planes : dict, optional
         ``{image file name: (x, y, z, nx, ny, nz)}``: a cut plane per image (e.g. each
         frame's valve plane, in world mm), in place of ``settings.cut_plane``.
+    rv_label : int, optional
+        The right ventricle's label in the same images: each mesh gets its landmarks
+        and the folder a landmark table (see the module). None: no landmarks.
 
     Returns
     -------
@@ -236,15 +344,22 @@ def mesh_label_images(
     ext = "." + ext.lower().lstrip(".")
     if ext not in WRITE_EXTENSIONS:
         raise ValueError(f"ext: expected one of {WRITE_EXTENSIONS}, got {ext!r}")
+    if rv_label is not None:
+        if isinstance(rv_label, bool) or not isinstance(rv_label, (int, np.integer)):
+            raise ValueError(f"rv_label: expected an int (or None), got {rv_label!r}")
+        rv_label = int(rv_label)
+        if rv_label == int(label):
+            raise ValueError(f"rv_label: must differ from the LV's label ({label})")
     images = [Path(p) for p in images]
     bad = [p for p in images if not p.name.lower().endswith(IMAGE_SUFFIXES)]
     if bad:
         raise ImageError(f"{bad[0]}: not a NIfTI label image (.nii or .nii.gz)")
     folder = Path(output)
     folder.mkdir(parents=True, exist_ok=True)
-    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes))
+    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label)
              for t in plan_meshing(images, frames, ext)]  # fmt: skip
     records = []
+    landmarks_file = None if rv_label is None else folder / LANDMARKS_FILE
     try:
         for record in run_batch(_mesh_one, tasks, jobs=jobs, progress=bool(progress),
                                 desc="images", unit="mesh", reuse=_meshed):  # fmt: skip
@@ -254,4 +369,6 @@ def mesh_label_images(
         records.sort(key=lambda r: order[r["mesh"]])
         with atomic_path(folder / REPORT_FILE) as tmp:
             tmp.write_text(_report_csv(records), encoding="utf-8")
-    return MeshingOutcome(folder, records)
+        if landmarks_file is not None:
+            write_landmarks(landmarks_file, _folder_landmarks(folder, ext, records))
+    return MeshingOutcome(folder, records, landmarks_file)
