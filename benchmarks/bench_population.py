@@ -14,11 +14,18 @@ Cohorts (``make_two_group_cohort``, seed 0, 40 subjects, 20 patients, 1,009 vert
   tangential to the wall, which a surface without material landmarks does not show;
 * ``null``: the same subjects without any abnormality (both groups from one distribution).
 
-Two arms: ``corresponded`` (the meshes in vertex correspondence, as generated) and
-``segmentations`` (every mesh re-triangulated and moved rigidly, then brought back
-into correspondence by ``correspond_cohort``: what segmentations give). The studies
-are listed in :data:`PLAN` (LDDMM at ``alpha^2`` in 0.01, 1, 100 on the meshes in
-correspondence, SVF and the twist at 1, the segmentations arm on 20 subjects); the analysis
+Arms: ``corresponded`` (the meshes in vertex correspondence, as generated) and three
+through segmentations, every mesh re-triangulated (as many faces as the atlas) and
+brought back into correspondence by ``correspond_cohort`` with its defaults (the
+input's own turn about the long axis kept, end-systole by normal projection):
+``segmentations`` (each subject moved by a random rigid motion of up to 30 degrees,
+with the landmark table: what segmentations in scanner coordinates with an RV label
+give), ``segmentations_unposed`` (in the atlas's frame, no landmarks) and
+``segmentations_nolandmarks`` (posed, no landmarks: the twist of each pose about the
+long axis is then left). The studies are listed in :data:`PLAN` (LDDMM at ``alpha^2``
+in 0.01, 1, 100 on the meshes in correspondence, SVF and the twist at 1, the
+segmentation arms at 1); the segmentation arms are scored on their 40 subjects and on
+the first 20 (``<cohort>_20``); the analysis
 scores every transport and the motion without transport against the planted
 region (:func:`ladders.study.population.score_transports`) with 10,000 permutations,
 and measures the family-wise false-positive rate on the null cohort (200 random
@@ -58,7 +65,13 @@ COHORTS = {
     "twist": MotionAbnormality("twist"),
     "null": None,
 }
-ARMS = ("corresponded", "segmentations")
+ARMS = ("corresponded", "segmentations", "segmentations_unposed", "segmentations_nolandmarks")
+#: Segmentation arms: (posed, landmark table used).
+SEGMENTATION_ARMS = {
+    "segmentations": (True, True),
+    "segmentations_unposed": (False, False),
+    "segmentations_nolandmarks": (True, False),
+}
 #: The studies: (arm, cohort, deformation, alpha^2, subjects). The alpha^2 sweep runs with
 #: LDDMM on the meshes in correspondence; SVF and the twist at alpha^2 = 1; the
 #: segmentations arm (whose correspondence costs most) on the first 20 subjects.
@@ -70,8 +83,12 @@ PLAN = (
     ("corresponded", "hypokinesia_mild", "svf", (1.0,), 40),
     ("corresponded", "null", "svf", (1.0,), 40),
     ("corresponded", "twist", "lddmm", (1.0,), 40),
-    ("segmentations", "hypokinesia", "lddmm", (1.0,), 20),
+    ("segmentations", "hypokinesia", "lddmm", (1.0,), 40),
+    ("segmentations", "null", "lddmm", (1.0,), 40),
     ("segmentations", "twist", "lddmm", (1.0,), 20),
+    ("segmentations_unposed", "hypokinesia", "lddmm", (1.0,), 40),
+    ("segmentations_unposed", "null", "lddmm", (1.0,), 40),
+    ("segmentations_nolandmarks", "hypokinesia", "lddmm", (1.0,), 40),
 )
 
 
@@ -88,12 +105,14 @@ def _subjects_and_atlas(arm: str, name: str, n: int, work: Path, jobs: int):
         return data.cohort, data
     from ladders.study.preparation import correspond_cohort
 
-    raw = work / "segmentations" / name
-    if not (raw / "groups.csv").is_file():
-        write_two_group_cohort(data, raw, remesh_factor=2.0, pose=True)
-    out = work / "corresponded" / name
+    posed, landmarks = SEGMENTATION_ARMS[arm]
+    raw = work / "segmentations" / f"{name}_{'posed' if posed else 'unposed'}"
+    if not (raw / "landmarks.csv").is_file():
+        write_two_group_cohort(data, raw, remesh_factor=1.0, pose=posed, landmarks=True)
+    out = work / "corresponded" / arm / name
     start = time.perf_counter()
-    correspond_cohort(raw / "atlas.vtk", raw, out, jobs=jobs)
+    correspond_cohort(raw / "atlas.vtk", raw, out, jobs=jobs,
+                      landmarks=None if landmarks else False)  # fmt: skip
     print(f"  correspondence of {2 * n} meshes: {time.perf_counter() - start:.0f} s", flush=True)
     return read_cohort(out), data
 
@@ -137,48 +156,56 @@ def _motions(work: Path, arm: str, name: str, subjects=None):
     return motions
 
 
+def _score(work, arm, name, n_permutations, repetitions, keep=None):
+    """Score one arm and cohort (its first ``keep`` subjects when given); publish the table."""
+    motions = _motions(work, arm, name)
+    if keep is not None:
+        motions = [m.subset(list(m.subjects)[:keep]) for m in motions]
+    data = _cohort(name, 40)
+    subjects = list(motions[0].subjects)
+    labels = np.array([data.groups[s] == "patients" for s in subjects])
+    nulls = None
+    if (work / "studies" / arm / "null").is_dir():
+        nulls = _motions(work, arm, "null", subjects)
+    start = time.perf_counter()
+    scores, _ = score_transports(
+        motions, labels, data.region.affected, np.random.default_rng(0), nulls,
+        n_permutations, repetitions, 1000,
+    )  # fmt: skip
+    if arm != "corresponded":  # the same subjects' meshes in correspondence, alongside
+        same = _motions(work, "corresponded", name, subjects)
+        same = [m for m in same if m.alpha2 in (None, 1.0) and m.deformation == "lddmm"]
+        extra, _ = score_transports(same, labels, data.region.affected,
+                                    np.random.default_rng(0), None, n_permutations)  # fmt: skip
+        for s in extra:
+            scores.append(replace(s, label=f"{s.label} [meshes in correspondence]"))
+    seconds = time.perf_counter() - start
+    table = scores_markdown(scores)
+    tag = f"{arm}_{name}" + ("" if keep is None else f"_{keep}")
+    (work / f"scores_{tag}.csv").write_text(scores_csv(scores))
+    plot_transport_scores(scores, work / f"scores_{tag}.png")
+    plot_transport_scores(scores, DOCS_IMAGES / f"population_{tag}.png")
+    print(f"\n{tag} ({len(labels)} subjects, {seconds:.0f} s):\n{table}", flush=True)
+    note = (
+        f"{data.region.abnormality.describe()}; {len(labels)} subjects "
+        f"({int(labels.sum())} patients); {int(data.region.affected.sum())} of "
+        f"{data.region.weight.size} atlas vertices affected; {n_permutations:,} "
+        "permutations; FWER under the null: "
+        + (f"{repetitions} random splits of the same subjects without the abnormality."
+           if nulls else "not measured in this arm.")
+    )  # fmt: skip
+    publish(f"population_{tag}", f"{note}\n\n{table}", "python benchmarks/bench_population.py")
+
+
 def run_analysis(work: Path, arms, cohorts, n_permutations: int, repetitions: int):
     for arm in arms:
         for name in cohorts:
             if name == "null" or not (work / "studies" / arm / name).is_dir():
                 continue
-            motions = _motions(work, arm, name)
-            data = _cohort(name, 40)
-            subjects = list(motions[0].subjects)
-            labels = np.array([data.groups[s] == "patients" for s in subjects])
-            nulls = None
-            if (work / "studies" / arm / "null").is_dir():
-                nulls = _motions(work, arm, "null", subjects)
-            start = time.perf_counter()
-            scores, _ = score_transports(
-                motions, labels, data.region.affected, np.random.default_rng(0), nulls,
-                n_permutations, repetitions, 1000,
-            )  # fmt: skip
-            if arm == "segmentations":  # the same subjects' meshes in correspondence, alongside
-                same = _motions(work, "corresponded", name, subjects)
-                same = [m for m in same if m.alpha2 in (None, 1.0) and m.deformation == "lddmm"]
-                extra, _ = score_transports(same, labels, data.region.affected,
-                                            np.random.default_rng(0), None, n_permutations)  # fmt: skip
-                for s in extra:
-                    scores.append(replace(s, label=f"{s.label} [meshes in correspondence]"))
-            seconds = time.perf_counter() - start
-            table = scores_markdown(scores)
-            (work / f"scores_{arm}_{name}.csv").write_text(scores_csv(scores))
-            plot_transport_scores(scores, work / f"scores_{arm}_{name}.png")
-            plot_transport_scores(scores, DOCS_IMAGES / f"population_{arm}_{name}.png")
-            print(
-                f"\n{arm}, {name} ({len(labels)} subjects, {seconds:.0f} s):\n{table}", flush=True
-            )
-            note = (
-                f"{data.region.abnormality.describe()}; {len(labels)} subjects "
-                f"({int(labels.sum())} patients); {int(data.region.affected.sum())} of "
-                f"{data.region.weight.size} atlas vertices affected; {n_permutations:,} "
-                "permutations; FWER under the null: "
-                + (f"{repetitions} random splits of the same subjects without the abnormality."
-                   if nulls else "not measured in this arm.")
-            )  # fmt: skip
-            publish(f"population_{arm}_{name}", f"{note}\n\n{table}",
-                    "python benchmarks/bench_population.py")  # fmt: skip
+            _score(work, arm, name, n_permutations, repetitions)
+            n = len(_motions(work, arm, name)[0].subjects)
+            if arm != "corresponded" and n > 20:
+                _score(work, arm, name, n_permutations, repetitions, keep=20)
 
 
 def main(argv=None) -> None:

@@ -41,10 +41,12 @@ TABLE1 = [
 
 
 def simulated(folder):
-    """``(cohort, motions)``: the cohort and its segmentations written into ``folder``."""
+    """``(cohort, motions)``: the cohort and its segmentations written into ``folder``, with
+    their landmark table (the poses are any rotation: only landmarks fix the turn about the
+    long axis then)."""
     cohort = make_synthetic_cohort(N_SUBJECTS, n_vertices=N_VERTICES, seed=SEED)
     motions = simulate_segmentations(
-        cohort, folder, np.random.default_rng(SEED), in_metres=[IN_METRES]
+        cohort, folder, np.random.default_rng(SEED), in_metres=[IN_METRES], landmarks=True
     )
     return cohort, motions
 

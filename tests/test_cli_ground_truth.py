@@ -86,9 +86,12 @@ def test_the_study_on_the_output_reproduces_table_1(session):
 @pytest.mark.filterwarnings("ignore::manifolds.errors.ConvergenceWarning")
 def test_the_atlas_of_the_segmentations_approaches_the_template(session):
     root, cohort = session[0], session[1]
+    # the surfaces' route (ICP; the folder's landmark table is tested below)
     status, out, err = run_cli("atlas", "--meshes", root / "seg", "-o", root / "atlas.vtk",
-                               "--units", "auto", "--tol", "0.05", "--no-progress")  # fmt: skip
+                               "--units", "auto", "--tol", "0.05", "--no-progress",
+                               "--no-landmarks")  # fmt: skip
     assert status == 0, err
+    assert not (root / "atlas_landmarks.csv").exists()
     record = json.loads((root / "atlas.json").read_text())
     assert record["converged"] and record["term"] == "varifold", record
     assert record["units"]["subjects"][IN_METRES] == "m"
@@ -101,3 +104,28 @@ def test_the_atlas_of_the_segmentations_approaches_the_template(session):
     # and nearer than its start (a remeshed, moved subject), both aligned the same way
     start = read_mesh(root / "seg" / f"{record['start']}_ed.ply")
     assert distance < template_distance(*start, cohort, align=True)
+
+
+def test_the_atlas_with_the_landmark_table_carries_its_landmarks(session):
+    """The folder's landmarks.csv aligns the subjects; the atlas's own landmarks are written
+    beside it, on its surface, and 'correspond' finds them there."""
+    from ladders.study.preparation import read_landmarks
+    from ladders.study.preparation.landmarks import check_landmarks
+
+    root, cohort = session[0], session[1]
+    status, out, err = run_cli("atlas", "--meshes", root / "seg", "-o", root / "lm" / "atlas.vtk",
+                               "--units", "auto", "--tol", "0.05", "--no-progress")  # fmt: skip
+    assert status == 0, err
+    v, f = read_mesh(root / "lm" / "atlas.vtk")
+    assert template_distance(v, f, cohort, align=True) < mean_subject_distance(cohort)
+    atlas_lm = read_landmarks(root / "lm" / "atlas_landmarks.csv")["atlas"]
+    check_landmarks(atlas_lm, v, f, 1e-6, "atlas")  # apex and septum on the surface
+    table = read_landmarks(root / "seg" / "landmarks.csv")
+    del table["atlas"]
+    (root / "lm" / "subjects.csv").write_text(
+        "subject,apex_x,apex_y,apex_z,base_x,base_y,base_z,septum_x,septum_y,septum_z\n"
+    )
+    status, out, err = run_cli("correspond", "--atlas", root / "lm" / "atlas.vtk", "--meshes",
+                               root / "seg", "-o", root / "lm" / "out", "--units", "auto",
+                               "--landmarks", root / "lm" / "subjects.csv", "--no-progress")  # fmt: skip
+    assert status == 2 and "--landmarks" in err and "no row for subject" in err, err

@@ -10,8 +10,10 @@ original ones. Two things no surface method can recover are set aside, and said:
   ED onto the atlas). The reference study runs on the originals brought into that
   frame the same way, with their true correspondence;
 * the rotation about the long axis: the built-in atlas is a surface of revolution,
-  so a subject's rotation about its axis is undetermined (the vertex comparison
-  uses the model's shapes rotated by the rotation the pipeline chose).
+  so no surface fit determines a subject's rotation about its axis; the
+  segmentations come with their landmark table, which does (the vertex comparison
+  still uses the model's shapes rotated by the rotation the pipeline chose, within a
+  degree of none).
 
 The full-size version is ``python benchmarks/bench_correspond.py --parts 4``.
 """

@@ -24,8 +24,10 @@ from .cli_types import (
 )
 from .preparation_arguments import (
     add_data_term_arguments,
+    add_landmark_arguments,
     add_units_arguments,
     correspondence_settings,
+    landmarks_argument,
     mesh_output_file,
     print_line,
     units_usage_error,
@@ -85,6 +87,7 @@ def add_atlas_parser(sub) -> None:
         "correspondence; 'varifold' and 'current' compare surfaces in any case",
     )
     add_data_term_arguments(p)
+    add_landmark_arguments(p)
     p.add_argument(
         "--tol",
         type=positive_float,
@@ -109,6 +112,7 @@ def run_atlas_command(args) -> int:
         build_atlas,
         resolve_atlas_start,
     )
+    from ..preparation.landmarks import LandmarkError
 
     try:
         inputs = read_atlas_inputs(args.meshes, units=args.units, allow_scale=args.allow_scale)
@@ -134,10 +138,13 @@ def run_atlas_command(args) -> int:
             args.meshes, args.output, correspondence_settings(args), start=args.start,
             term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
             progress=None if args.no_progress else _progress,
+            landmarks=landmarks_argument(args, args.meshes),
         )  # fmt: skip
     except AtlasInterrupted as exc:
         args.on_interrupt = exc.message
         raise
+    except LandmarkError as exc:
+        raise UsageError(f"symladders atlas: error: --landmarks: {exc}") from None
     res = run.result
     why = f"the limit, --max-iter {args.max_iter}" if res.n_iter >= args.max_iter else res.message
     state = "converged" if res.converged else "not converged"

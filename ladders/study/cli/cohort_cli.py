@@ -96,6 +96,10 @@ def add_cohort_parser(sub) -> None:
                         "atlas's faces (the meshes then need 'symladders correspond')")  # fmt: skip
     p.add_argument("--pose", action="store_true",
                    help="move each subject by a random rigid motion (up to 30 degrees, 20 mm)")  # fmt: skip
+    p.add_argument("--landmarks", action="store_true",
+                   help="also write landmarks.csv: apex, base-plane centre and septal point of "
+                        "the atlas and of every subject (posed with it), for 'symladders "
+                        "correspond' and 'symladders atlas'")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk",
@@ -124,7 +128,12 @@ def run_cohort_command(args) -> int:
         args.noise_length,
     )  # fmt: skip
     folder = write_two_group_cohort(
-        data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None, pose=args.pose
+        data,
+        Path(args.output),
+        ext=args.ext,
+        remesh_factor=args.remesh or None,
+        pose=args.pose,
+        landmarks=args.landmarks,
     )
     n_patients = int(data.labels.sum())
     print(

@@ -16,8 +16,10 @@ from pathlib import Path
 from .cli_types import DefaultsFormatter, UsageError, existing_folder, jobs_count, output_folder
 from .preparation_arguments import (
     add_data_term_arguments,
+    add_landmark_arguments,
     add_units_arguments,
     correspondence_settings,
+    landmarks_argument,
     mesh_file,
     print_line,
     units_usage_error,
@@ -38,8 +40,10 @@ def add_correspond_parser(sub) -> None:
         "with an atlas",
         description=(
             "Align each subject's ED and ES meshes rigidly onto the atlas (one transform per "
-            "subject, estimated on ED), register the atlas onto each with a varifold term and "
-            "write the deformed atlases: OUTPUT holds atlas.<ext>, <name>_ed.<ext>, "
+            "subject, estimated on ED; the input's own turn about the long axis is kept where "
+            "the surface cannot tell it, or landmarks fix it), register the atlas onto ED with a "
+            "varifold term, move it along its normals onto ES (the wall motion the surfaces "
+            "show) and write the results: OUTPUT holds atlas.<ext>, <name>_ed.<ext>, "
             "<name>_es.<ext> (read by 'symladders study --meshes OUTPUT'), quality.csv and "
             "quality.md (meshes to inspect first) and correspondence/<name>.json. A subject "
             "that fails is recorded with its reason and the others finish (exit status 1). "
@@ -81,6 +85,15 @@ def add_correspond_parser(sub) -> None:
         default="icp",
         help="rigid alignment of each subject onto the atlas; 'none': the meshes are in the "
         "atlas's frame already",
+    )
+    add_landmark_arguments(p, atlas_landmarks=True)
+    p.add_argument(
+        "--es-correspondence",
+        choices=("normal", "registration"),
+        default="normal",
+        help="end-systole: the corresponded ED moved along its normals onto the ES surface "
+        "(keeps the wall motion), or registered like ED (slides along the wall; "
+        "docs/preparation.md)",
     )
     add_data_term_arguments(p)
     _add_run_arguments(p)
@@ -152,14 +165,19 @@ def _summary(outcome) -> str:
 def run_correspond_command(args) -> int:
     """Correspond a folder of segmentations from parsed command-line arguments."""
     from ..preparation import UnitsError, correspond_cohort
+    from ..preparation.landmarks import LandmarkError
 
     n_vertices = _check_atlas(args.atlas)
     entries = _scan(args.meshes)
-    settings = correspondence_settings(args, alignment=args.alignment)
+    settings = correspondence_settings(
+        args, alignment=args.alignment, es_correspondence=args.es_correspondence
+    )
+    landmarks = landmarks_argument(args, args.meshes)
     output = Path(args.output)
     print_line(
         f"symladders correspond: {len(entries)} subject(s) from {args.meshes} onto the atlas "
         f"{args.atlas} ({n_vertices} vertices), output {output}"
+        + (f", landmarks {landmarks}" if landmarks else "")
     )
     args.on_interrupt = f"the subjects done are kept in {output}; rerun the command to resume"
     try:
@@ -167,10 +185,13 @@ def run_correspond_command(args) -> int:
             args.atlas, entries, output, settings, jobs=args.jobs,
             progress=None if args.no_progress else _progress, resume=not args.no_resume,
             units=args.units, allow_scale=args.allow_scale,
-            allow_pose=True if args.allow_pose else None, ext=args.ext,
+            allow_pose=True if args.allow_pose else None, ext=args.ext, landmarks=landmarks,
+            atlas_landmarks=args.atlas_landmarks,
         )  # fmt: skip
     except UnitsError as exc:
         raise units_usage_error("correspond", exc) from None
+    except LandmarkError as exc:
+        raise UsageError(f"symladders correspond: error: --landmarks: {exc}") from None
     print_line(_summary(outcome))
     if outcome.failed:
         print(

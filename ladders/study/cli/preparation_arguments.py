@@ -138,3 +138,45 @@ def mesh_output_file(text: str) -> Path:
 def print_line(text: str) -> None:
     """Print a progress line at once (a long run's progress must not wait in a buffer)."""
     print(text, flush=True)
+
+
+def _table_file(text: str) -> Path:
+    path = Path(text).expanduser()
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"expected a landmark table (CSV file), got {text!r}")
+    return path
+
+
+def add_landmark_arguments(p, atlas_landmarks: bool = False) -> None:
+    """Add ``--landmarks`` and ``--no-landmarks`` (and ``--atlas-landmarks``)."""
+    p.add_argument(
+        "--landmarks",
+        type=_table_file,
+        default=None,
+        help="landmark table (subject, apex_x..z, base_x..z, septum_x..z; row 'atlas' for the "
+        "atlas), in the mesh files' coordinates: fixes each subject's turn about the long axis, "
+        "which a surface fit leaves open (default: landmarks.csv of --meshes when present, as "
+        "'symladders mesh --rv-label' writes it)",
+    )
+    p.add_argument("--no-landmarks", action="store_true", help="ignore landmarks.csv of --meshes")
+    if atlas_landmarks:
+        p.add_argument(
+            "--atlas-landmarks",
+            type=_table_file,
+            default=None,
+            help="the atlas's landmarks (a table with a row 'atlas' or a single row); default: "
+            "the row 'atlas' of --landmarks, else <atlas>_landmarks.csv beside the atlas file "
+            "(written by 'symladders atlas')",
+        )
+
+
+def landmarks_argument(args, folder: Path):
+    """The landmark table to use: ``--landmarks``, ``folder/landmarks.csv``, or False (none)."""
+    from ..preparation.landmarks import LANDMARKS_FILE
+
+    if args.no_landmarks:
+        return False
+    if args.landmarks is not None:
+        return args.landmarks
+    found = Path(folder) / LANDMARKS_FILE
+    return found if found.is_file() else False

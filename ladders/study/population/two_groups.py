@@ -40,8 +40,10 @@ from ..cohort.synthetic_lv import (
 )
 from ..errors import CohortError
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
-from ..preparation.alignment import random_rigid_transform
+from ..preparation.alignment import SimilarityTransform, random_rigid_transform
+from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from ..preparation.remeshing import remesh
+from ..preparation.synthetic_landmarks import synthetic_landmarks
 
 __all__ = [
     "DEFAULT_ABNORMALITY",
@@ -201,6 +203,7 @@ def write_two_group_cohort(
     max_angle: float = 30.0,
     max_translation: float = 20.0,
     rng: np.random.Generator | None = None,
+    landmarks: bool = False,
 ) -> Path:
     """Write the cohort's meshes, ``groups.csv`` and ``planted_region.json`` into ``folder``.
 
@@ -221,6 +224,15 @@ def write_two_group_cohort(
         to ``max_angle`` degrees and translation up to ``max_translation`` mm.
     rng : numpy.random.Generator, optional
         Draws of the remeshing and the poses; default from the cohort's seed.
+    landmarks : bool, default False
+        Also write ``landmarks.csv``: the apex, base-plane centre and septal point of
+        the atlas (row ``atlas``) and of every subject's end-diastole, posed with it
+        (:func:`~ladders.study.preparation.synthetic_landmarks.synthetic_landmarks`), which
+        ``symladders correspond`` and ``symladders atlas`` read.
+
+    The truth file records each subject's pose (``"poses"``: its 4 x 4 matrix, the
+    identity without ``pose``), so that the rotation a correspondence leaves can be
+    measured.
 
     Returns
     -------
@@ -238,8 +250,13 @@ def write_two_group_cohort(
     n_faces = (
         None if remesh_factor is None else max(4, int(round(remesh_factor * len(cohort.faces))))
     )
+    poses, table = {}, {"atlas": synthetic_landmarks(cohort.atlas)}
     for s in cohort.subjects:
         motion = random_rigid_transform(rng, max_angle, max_translation) if pose else None
+        poses[s.name] = (motion or SimilarityTransform.identity()).matrix.tolist()
+        table[s.name] = synthetic_landmarks(s.ed)
+        if motion is not None:
+            table[s.name] = table[s.name].transformed(motion)
         for phase, vertices in (("ed", s.ed), ("es", s.es)):
             v, f = vertices, cohort.faces
             if n_faces is not None:
@@ -253,5 +270,8 @@ def write_two_group_cohort(
     record["pose"] = (
         {"max_angle_deg": max_angle, "max_translation_mm": max_translation} if pose else None
     )
+    record["poses"] = poses
+    if landmarks:
+        write_landmarks(folder / LANDMARKS_FILE, table)
     (folder / REGION_FILE).write_text(json.dumps(record, indent=1), encoding="utf-8")
     return folder

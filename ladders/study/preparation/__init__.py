@@ -4,7 +4,9 @@
   :mod:`.cohort_units`: :func:`check_cohort_units` (a cohort in correspondence) and
   :func:`read_atlas_inputs` (the ED meshes of a folder, for an atlas), in one unit;
 - :mod:`.alignment`: :class:`SimilarityTransform`, :func:`procrustes` (with
-  correspondence) and :func:`icp_align` (without); :mod:`.affine`: the affine
+  correspondence) and :func:`icp_align` (without); :mod:`.rigid_fit`:
+  :func:`fit_rigid`, the alignment that keeps the input's turn about the long axis
+  or follows anatomical landmarks (:mod:`.landmarks`: :class:`Landmarks`, the table); :mod:`.affine`: the affine
   pre-alignment of the atlas (:func:`affine_icp`);
 - :mod:`.correspondence`: :func:`correspond_mesh` and :func:`correspond_subject`,
   the atlas registered onto a mesh of any triangulation with a varifold term;
@@ -37,9 +39,19 @@ from .correspondence import (
     SubjectCorrespondence,
     correspond_mesh,
     correspond_subject,
+    project_mesh,
+)
+from .landmarks import (
+    LANDMARKS_FILE,
+    LandmarkError,
+    Landmarks,
+    landmark_transform,
+    read_landmarks,
+    write_landmarks,
 )
 from .quality_table import quality_rows, write_quality_table
 from .remeshing import remesh
+from .rigid_fit import AlignmentFit, fit_rigid
 from .simulation import (
     procrustes_aligned,
     recovery_errors,
@@ -80,6 +92,15 @@ __all__ = [
     "SubjectCorrespondence",
     "correspond_mesh",
     "correspond_subject",
+    "project_mesh",
+    "LANDMARKS_FILE",
+    "LandmarkError",
+    "Landmarks",
+    "landmark_transform",
+    "read_landmarks",
+    "write_landmarks",
+    "AlignmentFit",
+    "fit_rigid",
     "quality_rows",
     "write_quality_table",
     "remesh",

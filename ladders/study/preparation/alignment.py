@@ -8,8 +8,8 @@ Umeyama, SVD of the cross-covariance with the sign of the last singular
 vector fixed). Without correspondence, :func:`icp_align` runs the iterative
 closest point algorithm of :func:`trimesh.registration.icp` (point-to-surface
 with the target given as a mesh) from several starts: the centroids matched
-and the principal axes matched in each of their four orientations that make
-a rotation, each run point to point on the target's vertices and triangle
+with the input's own orientation, and with the principal axes matched in each
+of their four orientations that make a rotation, each run point to point on the target's vertices and triangle
 centres (fast), the best one refined point to surface. Two meshes whose shapes differ are
 then aligned by their surfaces, not by an anatomical frame; a corresponded
 pair is best aligned again by :func:`procrustes` on its vertices. A rotation
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import trimesh
+from scipy import spatial
 
 from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_array, check_rng
@@ -33,6 +34,7 @@ __all__ = [
     "procrustes",
     "icp_align",
     "principal_frame",
+    "icp_starts",
     "random_rigid_transform",
 ]
 
@@ -173,10 +175,12 @@ def principal_frame(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray
     return centroid, axes
 
 
-def _starts(source_v, source_f, target_v, target_f):
-    """Rigid starts: centroids matched, principal axes matched in their four proper orientations."""
+def icp_starts(source_v, source_f, target_v, target_f):
+    """Rigid starts, centroids matched: the input's own orientation, then the principal axes
+    matched in their four proper orientations."""
     cs, axs = principal_frame(source_v, source_f)
     ct, axt = principal_frame(target_v, target_f)
+    yield SimilarityTransform(np.eye(3), ct - cs)
     for flip in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)):
         rot = axt @ np.diag(flip) @ axs.T
         yield SimilarityTransform(rot, ct - rot @ cs)
@@ -192,13 +196,16 @@ def icp_align(
     initial: SimilarityTransform | None = None,
     max_iterations: int = 100,
     threshold: float = 1e-8,
+    surface: bool = True,
 ) -> tuple[SimilarityTransform, float]:
     """Align a mesh onto another surface by ICP (no correspondence needed).
 
     :func:`trimesh.registration.icp` moves the source vertices onto the closest
-    points of the target, from ``initial`` or, by default, from the four
-    principal-axes starts of the module docstring (point to point, keeping the
-    lowest cost), and refines the best point to surface.
+    points of the target, from ``initial`` or, by default, from the five starts
+    of the module docstring (point to point, keeping the lowest cost), and
+    refines the best point to surface. On a near surface of revolution the
+    lowest cost may be any turn about the axis: :func:`~.rigid_fit.fit_rigid`
+    keeps the input's own orientation there.
 
     Parameters
     ----------
@@ -212,6 +219,10 @@ def icp_align(
     max_iterations : int
     threshold : float
         ICP stops when the mean distance changes by less than this.
+    surface : bool, default True
+        Refine the best start point to surface; False keeps the point-to-point fit
+        (faster; the distance returned is then to the target's vertices and triangle
+        centres).
 
     Returns
     -------
@@ -222,8 +233,8 @@ def icp_align(
     """
     sv, sf = check_mesh(source_vertices, source_faces, "icp_align: source")
     tv, tf = check_mesh(target_vertices, target_faces, "icp_align: target")
-    surface = trimesh.Trimesh(tv, tf, process=False)
-    starts = [initial] if initial is not None else list(_starts(sv, sf, tv, tf))
+    target_mesh = trimesh.Trimesh(tv, tf, process=False)
+    starts = [initial] if initial is not None else list(icp_starts(sv, sf, tv, tf))
     # every start by point-to-point ICP (k-d tree) on the target's vertices and triangle
     # centres, then the best one refined point-to-surface (R-tree, slower)
     cloud = np.vstack([tv, tv[tf].mean(axis=1)])
@@ -235,13 +246,17 @@ def icp_align(
         )  # fmt: skip
         if best is None or cost < best[1]:
             best = (matrix, float(cost))
+    if not surface:
+        transform = SimilarityTransform.from_matrix(best[0])
+        distance = spatial.cKDTree(cloud).query(transform.apply(sv))[0]
+        return transform, float(distance.mean())
+    # the refinement stops when the mean squared distance changes by less than 1e-6 of itself
     matrix, _, _ = trimesh.registration.icp(
-        sv, surface, initial=best[0], threshold=threshold, max_iterations=max_iterations,
-        reflection=False, scale=scale,
+        sv, target_mesh, initial=best[0], threshold=max(threshold, 1e-6 * best[1]),
+        max_iterations=max_iterations, reflection=False, scale=scale,
     )  # fmt: skip
-    best = (matrix, None)
-    transform = SimilarityTransform.from_matrix(best[0])
-    distance = trimesh.proximity.closest_point(surface, transform.apply(sv))[1]
+    transform = SimilarityTransform.from_matrix(matrix)
+    distance = trimesh.proximity.closest_point(target_mesh, transform.apply(sv))[1]
     return transform, float(distance.mean())
 
 

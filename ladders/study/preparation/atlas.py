@@ -8,8 +8,11 @@ targets are the subjects' vertices (the squared-distance data term); when they
 are not, each target is a varifold (or current) data term towards the
 subject's mesh, and the atlas keeps the triangulation of its start. The start
 is a chosen subject or, for corresponding meshes, their vertex-wise mean shape;
-every mesh is first aligned rigidly onto it (Procrustes with correspondence,
-ICP without). Each iteration reports the total registration objective
+every mesh is first aligned rigidly onto it (Procrustes with correspondence;
+without, :func:`~.rigid_fit.fit_rigid`, which keeps the input's own turn about
+the long axis where the surfaces cannot tell, or follows anatomical landmarks
+where given: the atlas's landmarks are then those of the aligned subjects,
+averaged, with the apex and the septal point put back on the atlas's surface). Each iteration reports the total registration objective
 ``sum_i C_i`` and the norm of the averaged momenta; the result carries a
 convergence flag.
 """
@@ -26,8 +29,10 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.lddmm import LDDMMLandmarks
 from manifolds.validation import check_float, check_int
 
-from .alignment import SimilarityTransform, icp_align, procrustes
+from .alignment import SimilarityTransform, procrustes
 from .correspondence import CorrespondenceSettings
+from .landmarks import Landmarks
+from .rigid_fit import fit_rigid
 
 __all__ = ["AtlasResult", "estimate_atlas", "meshes_correspond"]
 
@@ -54,6 +59,8 @@ class AtlasResult:
         Whether the targets were the meshes' vertices in correspondence (squared
         distance) or their surfaces (the surface data term).
     message : str
+    landmarks : Landmarks or None
+        The atlas's landmarks, when the meshes' were given.
     """
 
     vertices: np.ndarray
@@ -65,6 +72,7 @@ class AtlasResult:
     transforms: list = field(default_factory=list)
     corresponding: bool = False
     message: str = ""
+    landmarks: Landmarks | None = None
 
 
 def _start(meshes, initial, corresponding):
@@ -107,17 +115,25 @@ def _start_and_term(meshes, initial, surface_term):
     return start_v, start_f, corresponding, surface
 
 
-def _aligned_targets(meshes, start_v, start_f, corresponding, surface, align, settings):
+def _aligned_targets(
+    meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm
+):
     """The rigid alignment of each mesh onto the start (Procrustes when they correspond,
-    else ICP) and the registration targets (the surface term's, or the vertices)."""
+    else :func:`fit_rigid`, with landmarks where given) and the registration targets (the
+    surface term's, or the vertices)."""
     transforms = []
-    for v, f in meshes:
+    for i, (v, f) in enumerate(meshes):
         if not align:
             transforms.append(SimilarityTransform.identity())
         elif corresponding:
             transforms.append(procrustes(v, start_v))
         else:
-            transforms.append(icp_align(v, f, start_v, start_f)[0])
+            fit = fit_rigid(
+                v, f, start_v, start_f, tolerance=settings.rotation_tolerance,
+                source_landmarks=None if landmarks is None else landmarks[i],
+                target_landmarks=start_lm,
+            )  # fmt: skip
+            transforms.append(fit.transform)
     moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
     if not surface:
         return transforms, np.stack([v for v, _ in moved])
@@ -135,6 +151,8 @@ def estimate_atlas(
     progress: Callable | None = None,
     surface_term: bool | None = None,
     checkpoint: Callable | None = None,
+    landmarks: list | None = None,
+    start_landmarks: Landmarks | None = None,
 ) -> AtlasResult:
     """LDDMM atlas of ``meshes`` (see the module).
 
@@ -166,6 +184,11 @@ def estimate_atlas(
     checkpoint : callable, optional
         ``checkpoint(iteration, vertices)`` with every iterate (the start first), e.g.
         to keep the last one when the estimation is interrupted.
+    landmarks : list of Landmarks, optional
+        One per mesh, in its coordinates: they fix each mesh's turn about the long axis
+        in the alignment onto the start.
+    start_landmarks : Landmarks, optional
+        The start's, when it is a mesh given (a subject's are ``landmarks[index]``).
 
     Returns
     -------
@@ -177,8 +200,9 @@ def estimate_atlas(
         raise ValueError("estimate_atlas: meshes: no mesh given")
     meshes = [check_mesh(v, f, f"estimate_atlas: mesh {i}") for i, (v, f) in enumerate(meshes)]
     start_v, start_f, corresponding, surface = _start_and_term(meshes, initial, surface_term)
+    start_lm = _start_landmarks(landmarks, start_landmarks, initial, len(meshes))
     transforms, targets = _aligned_targets(
-        meshes, start_v, start_f, corresponding, surface, align, settings
+        meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm
     )
     space = LDDMMLandmarks(len(start_v), 3, alpha=settings.alpha, settings=settings.registration,
                            cache_size=len(meshes) + 1)  # fmt: skip
@@ -195,7 +219,32 @@ def estimate_atlas(
         return it > 0 and moved <= tol
 
     res = frechet_mean(space, targets, initial=start_v, tol=0.0, max_iter=max_iter, callback=report)
+    atlas_lm = None
+    if landmarks is not None:
+        atlas_lm = _atlas_landmarks(landmarks, transforms, np.array(res.mean), start_f)
     return AtlasResult(
         np.array(res.mean), start_f, res.converged, res.n_iter, objectives, res.gradient_norms,
-        transforms, not surface, res.message,
+        transforms, not surface, res.message, atlas_lm,
     )  # fmt: skip
+
+
+def _start_landmarks(landmarks, start_landmarks, initial, n) -> Landmarks | None:
+    if landmarks is None:
+        return None
+    if len(landmarks) != n or not all(isinstance(lm, Landmarks) for lm in landmarks):
+        raise ValueError(f"estimate_atlas: landmarks: expected {n} Landmarks, one per mesh")
+    if isinstance(initial, tuple) or initial == "mean":
+        if start_landmarks is None and initial != "mean":
+            raise ValueError("estimate_atlas: start_landmarks: needed for a start mesh given")
+        return start_landmarks
+    return landmarks[0 if initial == "first" else int(initial)]
+
+
+def _atlas_landmarks(landmarks, transforms, vertices, faces) -> Landmarks:
+    """The mean of the aligned landmarks, apex and septal point on the atlas's surface."""
+    import trimesh
+
+    mean = np.mean([lm.transformed(t).as_array() for lm, t in zip(landmarks, transforms)], 0)
+    surface = trimesh.Trimesh(vertices, faces, process=False)
+    on_surface = trimesh.proximity.closest_point(surface, mean[[0, 2]])[0]
+    return Landmarks(on_surface[0], mean[1], on_surface[1])

@@ -8,7 +8,10 @@ meshes correspond, a surface term otherwise), runs
 to it, ``<name>.json``: convergence, objectives, data term, start, units,
 settings and the input files' SHA-256. Interrupted, it writes the last iterate
 and its record (``"interrupted": true``) before it stops, and raises
-:class:`AtlasInterrupted`, which says how to continue.
+:class:`AtlasInterrupted`, which says how to continue. With a landmark table
+(``landmarks.csv`` in the folder, or one given), every subject's turn about the
+long axis follows its landmarks, and the atlas's own are written next to it as
+``<name>_landmarks.csv`` (row ``atlas``), where ``symladders correspond`` finds them.
 """
 
 from __future__ import annotations
@@ -24,8 +27,39 @@ from ..meshes import MESH_EXTENSIONS, read_mesh, write_mesh
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
 from .cohort_units import AtlasInputs, read_atlas_inputs
 from .correspondence import CorrespondenceSettings
+from .landmarks import (
+    LANDMARKS_FILE,
+    LandmarkError,
+    atlas_landmarks_path,
+    read_landmarks,
+    write_landmarks,
+)
 
-__all__ = ["AtlasRun", "AtlasInterrupted", "build_atlas", "resolve_atlas_start", "atlas_term"]
+__all__ = [
+    "AtlasRun",
+    "AtlasInterrupted",
+    "build_atlas",
+    "resolve_atlas_start",
+    "atlas_term",
+]
+
+
+def _landmark_list(landmarks, meshes, inputs: AtlasInputs):
+    """The subjects' landmarks in the meshes' unit, in ``inputs.names`` order, or None."""
+    if landmarks is False:
+        return None, None
+    if landmarks is None:
+        if not isinstance(meshes, str | Path) or not (Path(meshes) / LANDMARKS_FILE).is_file():
+            return None, None
+        landmarks = Path(meshes) / LANDMARKS_FILE
+    table = dict(landmarks) if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    missing = [n for n in inputs.names if n not in table]
+    if missing:
+        raise LandmarkError(f"landmarks: no row for subject(s) {missing} in {landmarks}")
+    factors = inputs.units.factors if inputs.units is not None else {}
+    rows = [table[n].scaled(factors.get(n, 1.0)) for n in inputs.names]
+    return rows, table.get("atlas")
+
 
 TERMS = ("auto", "landmarks", "varifold", "current")
 
@@ -147,6 +181,7 @@ def build_atlas(
     allow_scale: bool = False,
     progress: Callable | None = None,
     inputs: AtlasInputs | None = None,
+    landmarks=None,
 ) -> AtlasRun:
     """Estimate the atlas of the ED meshes of the folder ``meshes`` and write it to ``output``.
 
@@ -166,6 +201,9 @@ def build_atlas(
         As :func:`read_atlas_inputs`.
     inputs : AtlasInputs, optional
         The inputs, already read (``meshes``, ``units`` and ``allow_scale`` then unused).
+    landmarks : str, Path, dict or False, optional
+        A landmark table (:mod:`.landmarks`) or ``{subject: Landmarks}``; by default
+        ``landmarks.csv`` of the folder when there is one; False: none.
 
     Raises
     ------
@@ -195,10 +233,20 @@ def build_atlas(
     def checkpoint(it, vertices):
         seen.update(n_iter=it, vertices=vertices)
 
+    rows, start_lm = _landmark_list(landmarks, meshes, inputs)
+    if rows is not None and isinstance(initial, tuple) and start_lm is None:
+        sidecar = atlas_landmarks_path(start) if start else None
+        if sidecar is None or not sidecar.is_file():
+            raise LandmarkError(
+                f"landmarks: the start {start} has none: add its row 'atlas' to the table or "
+                f"write them to {sidecar}"
+            )
+        start_lm = read_landmarks(sidecar).get("atlas")
     try:
         res = estimate_atlas(
             inputs.meshes, settings, initial=initial, tol=tol, max_iter=max_iter,
-            progress=report, surface_term=surface, checkpoint=checkpoint,
+            progress=report, surface_term=surface, checkpoint=checkpoint, landmarks=rows,
+            start_landmarks=start_lm,
         )  # fmt: skip
     except KeyboardInterrupt:
         if seen.get("n_iter", 0) < 1:
@@ -215,5 +263,9 @@ def build_atlas(
         ) from None
     record = _record(output, inputs, settings, label, {**vars(res), "term": name}, tol,
                      max_iter, False)  # fmt: skip
+    if res.landmarks is not None:
+        record["landmarks"] = str(
+            write_landmarks(atlas_landmarks_path(output), {"atlas": res.landmarks})
+        )
     path = _write(output, res.vertices, res.faces, record)
     return AtlasRun(res, record, output, path, inputs, name, label)

@@ -11,6 +11,14 @@ and writes, in ``output``::
     quality.csv, quality.md         one row per mesh, flagged rows first (:mod:`.quality_table`)
     correspondence/<name>.json      per subject: status, transform, units, quality, hashes
 
+Anatomical landmarks (:mod:`ladders.study.preparation.landmarks`: apex, base-plane centre, septal point)
+fix each subject's turn about the long axis, which the surfaces leave open: a
+landmark table (``landmarks=``, or ``landmarks.csv`` in the folder of meshes, as
+``symladders mesh --rv-label`` and ``symladders cohort --landmarks`` write it) needs
+a row per subject and the atlas's own (row ``atlas``, ``atlas_landmarks``, or
+``<atlas>_landmarks.csv`` beside the atlas file, as ``symladders atlas`` writes it); a
+missing row or a landmark far from its mesh is refused before any computation.
+
 A subject that fails is recorded with its reason (``"status": "failed"``), its
 meshes from an earlier run are removed (the study must not read them), and the
 others finish. Every file is written atomically and a subject's record last, so
@@ -37,6 +45,14 @@ from ..files import array_digest, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
 from ..running.store import validate_subject_name
 from .correspondence import CorrespondenceSettings, correspond_subject
+from .landmarks import (
+    LANDMARKS_FILE,
+    LandmarkError,
+    Landmarks,
+    atlas_landmarks_path,
+    check_landmarks,
+    read_landmarks,
+)
 from .quality_table import write_quality_table
 from .units import check_units_and_pose
 
@@ -97,13 +113,16 @@ def scan_segmentations(folder, phases=("ed", "es")) -> dict:
     return {n: {p: entries[n][p] for p in phases} for n in sorted(entries, key=natural_key)}
 
 
-def _fingerprint(settings, atlas_hash, slot, factor) -> dict:
-    return {
+def _fingerprint(settings, atlas_hash, slot, factor, landmarks) -> dict:
+    out = {
         "settings": settings.key(),
         "atlas": atlas_hash,
         "inputs": {p: file_sha256(slot[p]) for p in ("ed", "es")},
         "unit_factor": factor,
     }
+    if landmarks is not None:
+        out["landmarks"] = [lm.as_array().round(9).tolist() for lm in landmarks]
+    return out
 
 
 def _reusable(
@@ -121,7 +140,7 @@ def _reusable(
 def _reuse_check(resume: bool, outcome):
     """``reuse`` of :func:`~ladders.study.batch.run_batch`: a subject's record when it is done."""
 
-    def stored(name, slot, atlas, settings, factor, output, ext, fingerprint):
+    def stored(name, slot, atlas, settings, factor, output, ext, fingerprint, landmarks):
         record = None
         if resume:
             record = _reusable(output / RECORDS / f"{name}.json", fingerprint, output, name, ext)
@@ -132,20 +151,31 @@ def _reuse_check(resume: bool, outcome):
     return stored
 
 
-def _correspond_one(name, slot, atlas, settings, factor, output, ext, fingerprint) -> dict:
-    """Correspond one subject; the record (status ok or failed) is written last."""
+def _correspond_one(
+    name, slot, atlas, settings, factor, output, ext, fingerprint, landmarks
+) -> dict:
+    """Correspond one subject; the record (status ok or failed) is written last.
+
+    ``landmarks`` is None or ``(subject's, atlas's)`` in the atlas's unit."""
     record = {"subject": name, "fingerprint": fingerprint, "unit_factor": factor}
     try:
         meshes = {}
         for phase in ("ed", "es"):
             v, f = read_mesh(slot[phase])
             meshes[phase] = (v * factor, f)
-        out = correspond_subject(*atlas, meshes["ed"], meshes["es"], settings)
+        subject_lm, atlas_lm = landmarks if landmarks is not None else (None, None)
+        out = correspond_subject(*atlas, meshes["ed"], meshes["es"], settings,
+                                 landmarks=subject_lm, atlas_landmarks=atlas_lm)  # fmt: skip
         for phase, c in (("ed", out.ed), ("es", out.es)):
             write_mesh(output / f"{name}_{phase}{ext}", c.vertices, atlas[1], atomic=True)
             record[phase] = {"input": str(slot[phase]), "n_input_vertices": len(meshes[phase][0]),
                              **c.quality}  # fmt: skip
         record.update(status="ok", transform=out.transform.as_dict())
+        if out.ed.alignment is not None:
+            record["alignment"] = out.ed.alignment.as_dict()
+        if landmarks is not None:
+            record["landmarks"] = {"subject": subject_lm.as_array().tolist(),
+                                   "atlas": atlas_lm.as_array().tolist()}  # fmt: skip
     except Exception as exc:  # a failing subject must not stop the others
         record.update(status="failed", reason=f"{type(exc).__name__}: {exc}",
                       traceback=traceback.format_exc())  # fmt: skip
@@ -163,6 +193,59 @@ def _readable(entries: dict) -> dict:
             out[name] = {p: read_mesh(slot[p]) for p in ("ed", "es")}
         except (ValueError, OSError):
             continue
+    return out
+
+
+def _subject_landmarks(landmarks, meshes, entries) -> dict | None:
+    """The landmark table to use: given, found in the folder of meshes, or none."""
+    if landmarks is False:
+        return None
+    if landmarks is None:
+        if isinstance(meshes, dict) or not (Path(meshes) / LANDMARKS_FILE).is_file():
+            return None
+        landmarks = Path(meshes) / LANDMARKS_FILE
+    table = dict(landmarks) if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    missing = [n for n in entries if n not in table]
+    if missing:
+        raise LandmarkError(
+            f"landmarks: no row for subject(s) {missing} (of {len(entries)}) in "
+            f"{'the table given' if isinstance(landmarks, dict) else landmarks}"
+        )
+    return table
+
+
+def _atlas_landmarks(atlas_landmarks, table, atlas) -> Landmarks:
+    if isinstance(atlas_landmarks, Landmarks):
+        return atlas_landmarks
+    if atlas_landmarks is None and "atlas" not in table and isinstance(atlas, str | os.PathLike):
+        sidecar = atlas_landmarks_path(atlas)
+        atlas_landmarks = sidecar if sidecar.is_file() else None
+    if atlas_landmarks is not None:
+        rows = read_landmarks(atlas_landmarks)
+        if "atlas" not in rows and len(rows) != 1:
+            raise LandmarkError(
+                f"atlas_landmarks: {atlas_landmarks} has no row 'atlas' and {len(rows)} rows"
+            )
+        return rows.get("atlas") or next(iter(rows.values()))
+    if "atlas" not in table:
+        raise LandmarkError(
+            "landmarks: the table has no row 'atlas' (the atlas's own apex, base-plane centre "
+            "and septal point) and the atlas file has no <name>_landmarks.csv beside it: add "
+            "the row, or give the atlas's landmarks (--atlas-landmarks)"
+        )
+    return table["atlas"]
+
+
+def _checked_landmarks(table, atlas_lm, atlas_mesh, readable, factors, tolerance) -> dict:
+    """Per subject ``(subject's, atlas's)`` landmarks in the atlas's unit, checked on the meshes."""
+    check_landmarks(atlas_lm, *atlas_mesh, tolerance, "atlas")
+    out = {}
+    for name, factor in factors.items():
+        lm = table[name].scaled(factor)
+        if name in readable:
+            v, f = readable[name]["ed"]
+            check_landmarks(lm, v * factor, f, tolerance, name)
+        out[name] = (lm, atlas_lm)
     return out
 
 
@@ -190,6 +273,8 @@ def correspond_cohort(
     allow_pose: bool | None = None,
     atlas_unit: str = "mm",
     ext: str | None = None,
+    landmarks=None,
+    atlas_landmarks=None,
 ) -> CohortCorrespondence:
     """Correspond every subject of a folder of segmentations to ``atlas`` (see the module).
 
@@ -216,6 +301,13 @@ def correspond_cohort(
     ext : str, optional
         Extension of the written meshes (default the atlas file's when
         :func:`~ladders.study.meshes.mesh_io.write_mesh` writes it, else ``.vtk``).
+    landmarks : str, Path, dict or False, optional
+        A landmark table (:func:`~.landmarks.read_landmarks`) or ``{subject: Landmarks}``,
+        in the mesh files' coordinates; by default ``landmarks.csv`` of the folder of
+        meshes when there is one; False: none.
+    atlas_landmarks : Landmarks, str or Path, optional
+        The atlas's landmarks (in its coordinates), or a table with a row ``atlas`` (or
+        a single row); by default the table's row ``atlas``.
 
     Returns
     -------
@@ -226,13 +318,19 @@ def correspond_cohort(
     UnitsError
         Meshes whose size disagrees with the atlas's, unless ``units`` or ``allow_scale``,
         or whose pose does, unless ``allow_pose``.
+    LandmarkError
+        A landmark table without a row for a subject or the atlas, or with a landmark
+        far from its mesh.
     """
     settings = settings or CorrespondenceSettings()
     atlas_mesh, atlas_ext = _read_atlas(atlas)
     ext = "." + (ext or atlas_ext).lower().lstrip(".")
     entries = scan_segmentations(meshes) if not isinstance(meshes, dict) else dict(meshes)
+    table = _subject_landmarks(landmarks, meshes, entries)
+    atlas_lm = None if table is None else _atlas_landmarks(atlas_landmarks, table, atlas)
+    readable = _readable(entries)
     report = check_units_and_pose(
-        *atlas_mesh, _readable(entries), atlas_unit=atlas_unit, units=units,
+        *atlas_mesh, readable, atlas_unit=atlas_unit, units=units,
         allow_scale=allow_scale,
         allow_pose=settings.alignment == "icp" if allow_pose is None else allow_pose,
     )  # fmt: skip
@@ -243,8 +341,12 @@ def correspond_cohort(
     atlas_hash = array_digest(atlas_mesh[0]) + array_digest(atlas_mesh[1])
 
     factors = {n: report.factors.get(n, 1.0) for n in entries}
+    pairs = dict.fromkeys(entries)
+    if table is not None:
+        pairs = _checked_landmarks(table, atlas_lm, atlas_mesh, readable, factors,
+                                   settings.landmark_tolerance)  # fmt: skip
     tasks = [(name, slot, atlas_mesh, settings, factors[name], output, ext,
-              _fingerprint(settings, atlas_hash, slot, factors[name]))
+              _fingerprint(settings, atlas_hash, slot, factors[name], pairs[name]), pairs[name])
              for name, slot in entries.items()]  # fmt: skip
     records = {}
     for record in run_batch(_correspond_one, tasks, jobs=jobs, reuse=_reuse_check(resume, outcome)):

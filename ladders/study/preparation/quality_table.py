@@ -4,9 +4,16 @@ A row holds the data term's distance before and after the registration, the
 Hausdorff and mean surface distances of the corresponded mesh to its input (in
 the atlas's unit), the optimiser's convergence and iterations. A mesh is flagged
 when its subject failed (the reason is given), its registration did not
-converge, a distance exceeds the settings' thresholds, or its mean surface
-distance is more than three times the cohort's median (at least five meshes).
+converge, a distance exceeds the settings' thresholds, its mean surface
+distance is more than three times the cohort's median (at least five meshes),
+its landmarks and its surface fit disagree by more than ``flag_landmark_disagreement`` degrees, or fewer than
+60 % of its vertices found the end-systolic surface along their normal.
 Flagged rows come first, then the others by decreasing mean surface distance.
+The end-diastolic rows also say how the mesh was aligned (``alignment``: ``icp``
+or ``landmarks``) and over how many degrees about the long axis the surface fit
+stays within its tolerance of the best (``axial_spread_deg``, 360 for a surface
+of revolution): above ``flag_axial_spread`` without landmarks, the turn kept is
+the input's own (:mod:`.rigid_fit`), which ``quality.md`` says in its header.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ __all__ = ["COLUMNS", "quality_rows", "write_quality_table"]
 COLUMNS = (
     "subject", "phase", "status", "flagged", "reasons", "n_input_vertices", "distance_before",
     "distance_after", "hausdorff", "mean_surface_distance", "converged", "n_iter", "unit",
+    "alignment", "axial_spread_deg", "landmark_disagreement_deg", "normal_hit_fraction",
 )  # fmt: skip
 
 
@@ -39,6 +47,15 @@ def _flags(row: dict, settings, median: float | None) -> list[str]:
         out.append(f"Hausdorff distance > {settings.flag_hausdorff:g}")
     if median is not None and row["mean_surface_distance"] > 3 * median:
         out.append(f"mean surface distance > 3 x the cohort's median ({median:.3g})")
+    disagreement = row.get("landmark_disagreement_deg")
+    if disagreement not in ("", None) and disagreement > settings.flag_landmark_disagreement:
+        out.append(
+            f"landmarks and surface fit differ by {disagreement:.0f} degrees "
+            f"(> {settings.flag_landmark_disagreement:g}): check the landmarks"
+        )
+    hits = row.get("normal_hit_fraction")
+    if hits not in ("", None) and hits < 0.6:
+        out.append(f"only {hits:.0%} of the vertices met the surface along their normal")
     return out
 
 
@@ -67,6 +84,8 @@ def quality_rows(records: list[dict], settings, units: dict | None = None) -> li
 
 
 def _fmt(value) -> str:
+    if value is None:
+        return ""
     if isinstance(value, float):
         return f"{value:.4g}"
     return str(value)
@@ -88,6 +107,20 @@ def write_quality_table(records, output, settings, units=None) -> list[dict]:
         f"{len(rows)} meshes, {n_flag} flagged for inspection (listed first). Distances in the "
         "atlas's unit; `distance_*` is the data term's RKHS distance (unit^2).",
         "",
+    ]
+    open_turn = [r for r in rows if r["alignment"] == "icp"
+                 and isinstance(r["axial_spread_deg"], float)
+                 and r["axial_spread_deg"] > settings.flag_axial_spread]  # fmt: skip
+    if open_turn:
+        spreads = [r["axial_spread_deg"] for r in open_turn]
+        lines += [
+            f"{len(open_turn)} subject(s): the surface leaves the turn about the long axis open "
+            f"(fits within {settings.rotation_tolerance:.0%} of the best over {min(spreads):.0f} "
+            f"to {max(spreads):.0f} degrees); their input's own orientation was kept. Anatomical "
+            "landmarks (a landmark table, or a right-ventricle label) fix it.",
+            "",
+        ]
+    lines += [
         "| " + " | ".join(COLUMNS) + " |",
         "|" + "---|" * len(COLUMNS),
     ]

@@ -41,6 +41,7 @@ def simulate_segmentations(
     max_angle: float = 180.0,
     max_translation: float = 50.0,
     ext: str = ".ply",
+    landmarks: bool = False,
 ) -> dict[str, SimilarityTransform]:
     """Write the cohort's meshes as segmentations into ``folder`` (see the module).
 
@@ -57,6 +58,11 @@ def simulate_segmentations(
     max_angle, max_translation : float
         Range of the random rigid motions (degrees, mm).
     ext : str
+
+    landmarks : bool, default False
+        Also write ``landmarks.csv`` (each subject's apex, base-plane centre and septal
+        point, moved and in its file's unit, and the atlas's), which fixes each
+        subject's turn about the long axis in ``correspond_cohort``.
 
     Returns
     -------
@@ -76,6 +82,15 @@ def simulate_segmentations(
             v, f = remesh(vertices, cohort.faces, n_faces)
             write_mesh(folder / f"{s.name}_{phase}{ext}", motions[s.name].apply(v) * unit, f)
     write_mesh(folder / "atlas.vtk", cohort.atlas, cohort.faces)
+    if landmarks:
+        from .landmarks import LANDMARKS_FILE, write_landmarks
+        from .synthetic_landmarks import synthetic_landmarks
+
+        table = {"atlas": synthetic_landmarks(cohort.atlas)}
+        for s in cohort.subjects:
+            moved = synthetic_landmarks(s.ed).transformed(motions[s.name])
+            table[s.name] = moved.scaled(1e-3 if s.name in metres else 1.0)
+        write_landmarks(folder / LANDMARKS_FILE, table)
     return motions
 
 
