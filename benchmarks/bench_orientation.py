@@ -162,12 +162,13 @@ def write_label_images(data, work: Path, spacing: float = 1.5) -> Path:
     for s in data.cohort.subjects:
         pose = SimilarityTransform.from_matrix(np.array(truth["poses"][s.name]))
         lm = synthetic_landmarks(s.ed).transformed(pose)
+        world_ed = pose.apply(s.ed)  # one grid for both frames, around end-diastole
+        low = world_ed.min(axis=0) - 25.0
+        shape = tuple(int(n) for n in np.ceil((world_ed.max(axis=0) + 25.0 - low) / spacing))
+        affine = np.diag([spacing, spacing, spacing, 1.0])
+        affine[:3, 3] = low
         for phase, v in (("ed", s.ed), ("es", s.es)):
             world = pose.apply(v)
-            low = world.min(axis=0) - 25.0
-            shape = tuple(int(n) for n in np.ceil((world.max(axis=0) + 25.0 - low) / spacing))
-            affine = np.diag([spacing, spacing, spacing, 1.0])
-            affine[:3, 3] = low
             labels = voxelize(world, data.cohort.faces, affine, shape, label=1)
             top = pose.apply(np.array([[0.0, 0.0, v[:, 2].max()]]))[0]
             labels = add_rv_label(labels, affine, lm.apex, top, lm.septum - lm.apex)

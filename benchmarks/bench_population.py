@@ -117,9 +117,11 @@ def _subjects_and_atlas(arm: str, name: str, n: int, work: Path, jobs: int):
     return read_cohort(out), data
 
 
-def _plan(quick: bool, arms, cohorts):
+def _plan(quick: bool, arms, cohorts, only_alpha2=None):
     for arm, name, deformation, alpha2, n in PLAN:
-        if arm in arms and name in cohorts:
+        if only_alpha2 is not None:
+            alpha2 = tuple(a for a in alpha2 if a in only_alpha2)
+        if arm in arms and name in cohorts and alpha2:
             yield (
                 (arm, name, deformation, (1.0,), 16)
                 if quick
@@ -216,10 +218,12 @@ def main(argv=None) -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--arms", nargs="+", choices=ARMS, default=list(ARMS))
     parser.add_argument("--cohorts", nargs="+", choices=tuple(COHORTS), default=list(COHORTS))
+    parser.add_argument("--alpha2", nargs="+", type=float, default=None,
+                        help="run only these alpha^2 of the plan")  # fmt: skip
     args = parser.parse_args(argv)
     print(machine(), flush=True)
     if args.stage in ("studies", "all"):
-        run_studies(args.work, args.jobs, _plan(args.quick, args.arms, args.cohorts))
+        run_studies(args.work, args.jobs, _plan(args.quick, args.arms, args.cohorts, args.alpha2))
     if args.stage in ("analysis", "all"):
         run_analysis(args.work, args.arms, args.cohorts, 2000 if args.quick else 10000,
                      50 if args.quick else 200)  # fmt: skip

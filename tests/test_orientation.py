@@ -241,3 +241,30 @@ def test_cohort_command_writes_landmarks_and_poses(tmp_path):
         pose = SimilarityTransform.from_matrix(np.array(truth["poses"][s.name]))
         assert np.allclose(table[s.name].apex, pose.apply(s.ed[:1])[0], atol=1e-6)
         assert pose.rotation_angle() > 0.0
+
+
+def test_normal_projection_onto_an_ellipsoid_is_the_analytic_root():
+    """Each vertex of ellipsoid A moved along its normal onto ellipsoid B: the distance is the
+    root of |D^-1 (p + t n)|^2 = 1 nearest 0, to the discretisation of B's triangles."""
+    import trimesh
+
+    from ladders.study.wall_motion import normal_wall_motion
+
+    sphere = trimesh.creation.icosphere(subdivisions=5)
+    a_axes, b_axes = np.array([30.0, 24.0, 45.0]), np.array([24.0, 20.0, 40.0])
+    coarse = trimesh.creation.icosphere(subdivisions=3)
+    va, fa = np.array(coarse.vertices) * a_axes, np.array(coarse.faces)
+    vb, fb = np.array(sphere.vertices) * b_axes, np.array(sphere.faces)
+    proj = normal_wall_motion(va, fa, vb, fb)
+    n = proj.normals
+    # exact normals of A at its vertices (the mesh's are averages): use the mesh's, as the
+    # projection does, and solve the quadratic along them
+    p, d = va / b_axes, n / b_axes
+    qa, qb, qc = (d * d).sum(1), 2 * (p * d).sum(1), (p * p).sum(1) - 1
+    roots = np.stack([(-qb + s * np.sqrt(qb**2 - 4 * qa * qc)) / (2 * qa) for s in (1, -1)])
+    t = roots[np.argmin(np.abs(roots), axis=0), np.arange(len(va))]
+    sagitta = np.linalg.norm(vb[fb[:, 0]] - vb[fb[:, 1]], axis=1).max() ** 2 / (8 * 20.0)
+    assert proj.hit.all()
+    assert np.abs(proj.distance - t).max() < sagitta + 1e-6
+    assert np.abs(proj.distance - t).max() < 0.05  # mm, on a 40 mm ellipsoid
+    assert (proj.distance < 0).all()  # B inside A: inward

@@ -36,8 +36,12 @@ def apply_affine(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def _fit(source_h, target_pts):
-    """The affine matrix ``(4, 4)`` of the least-squares fit ``source_h -> target_pts``."""
-    sol = np.linalg.lstsq(source_h, target_pts, rcond=None)[0]
+    """The affine matrix ``(4, 4)`` of the least-squares fit ``source_h -> target_pts``.
+
+    Pairs with a non-finite coordinate (a point carried back through a degenerate
+    triangle) are left out."""
+    keep = np.isfinite(source_h).all(axis=1) & np.isfinite(target_pts).all(axis=1)
+    sol = np.linalg.lstsq(source_h[keep], target_pts[keep], rcond=None)[0]
     out = np.eye(4)
     out[:3, :3], out[:3, 3] = sol[:3].T, sol[3]
     return out
@@ -48,7 +52,8 @@ def _step(matrix, sv_h, sf, target_mesh, tv):
     moved = apply_affine(matrix, sv_h[:, :3])
     to_target = trimesh.proximity.closest_point(target_mesh, moved)[0]
     points, _, tri = trimesh.proximity.closest_point(trimesh.Trimesh(moved, sf, process=False), tv)
-    bary = trimesh.triangles.points_to_barycentric(moved[sf[tri]], points)
+    with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: left out
+        bary = trimesh.triangles.points_to_barycentric(moved[sf[tri]], points)
     back = np.einsum("nk,nkd->nd", bary, sv_h[sf[tri]])
     return _fit(np.r_[sv_h, back], np.r_[to_target, tv])
 

@@ -6,23 +6,27 @@ axis. Segmentations come in scanner coordinates, where that turn is already
 consistent across subjects, or with anatomical landmarks that fix it. So
 :func:`fit_rigid`:
 
-1. runs ICP (:func:`~.alignment.icp_align`) from the identity (the input's own
-   pose) and from the principal-axes starts, and among the fits whose residual
-   (mean distance to the target) is within ``tolerance`` (relative) of the best,
-   keeps the smallest rotation;
-2. scans the rotations about the target's long axis (through its centroid, every
-   degree): the arc of angles whose residual stays within ``tolerance`` of the
-   best is the *axial spread*, the rotations the surface cannot tell apart (360
-   for a surface of revolution). Within it, the angle giving the smallest total
-   rotation is applied: a subject already in the atlas's orientation stays there,
-   a posed one is turned back by its pose, less the pose's twist about the long
-   axis, which no surface shows;
-3. with landmarks (:class:`~.landmarks.Landmarks` of the source and of the
-   target), starts ICP from the landmarks' frame (:func:`~.landmarks.landmark_transform`)
-   and, after it, turns the result about the target's long axis so that the
-   septal directions agree: the surface fixes the axis and the position, the
-   landmarks the turn about the axis. The angle between the ICP fit and the
-   landmarks' frame is reported (a large one means landmarks and surface disagree).
+1. runs ICP (:func:`~.alignment.icp_align`, point to point) from the input's own
+   orientation and from the principal-axes starts, and among the fits whose
+   residual (mean point-to-plane distance to the target) is within ``tolerance``
+   (relative, plus the triangulation's own ripple) of the best, keeps the smallest
+   rotation;
+2. replaces its rotation by that of the affine fit between the moved mesh and the
+   target (the polar factor of :func:`~.affine.affine_icp`): the rigid motion left
+   once size and elongation are fitted, which a rigid fit between ventricles of
+   different proportions tilts by a few degrees;
+3. scans the turns about the target's long axis (through its centroid, every
+   degree): the arc of turns whose residual stays within the tolerance of the best
+   is the *axial spread*, the turns the surface cannot tell apart (360 for a surface
+   of revolution). Within it, the turn giving the smallest total rotation is
+   applied: a subject already in the atlas's orientation stays there, a posed one is
+   turned back by its pose less the pose's twist about the long axis, which no
+   surface shows;
+4. with landmarks (:class:`~.landmarks.Landmarks` of the source and of the target)
+   instead: the rotation is the landmarks' (:func:`~.landmarks.landmark_transform`),
+   the translation the surface's. The surface fit from the landmarks' start (ICP and
+   the affine rotation) is still made, and its angle to the landmarks' rotation is
+   reported: a large one means that landmarks and surface disagree.
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ from scipy import spatial
 from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_float
 
+from .affine import affine_icp
 from .alignment import SimilarityTransform, icp_align, icp_starts, principal_frame
 from .landmarks import Landmarks, axial_angle, landmark_transform
 
@@ -124,10 +129,6 @@ class _Surface:
         return float(np.abs(gap).mean())
 
 
-def _residual(surface: _Surface, points: np.ndarray) -> float:
-    return surface.residual(points)
-
-
 def _subsample(points: np.ndarray) -> np.ndarray:
     step = max(1, int(np.ceil(len(points) / _MAX_SCAN_POINTS)))
     return points[::step]
@@ -138,7 +139,7 @@ def _axial_scan(transform, source, target, axis, centre, tolerance):
     angles = np.arange(-180, 180)
     moved = transform.apply(source)
     residuals = np.array(
-        [_residual(target, axis_rotation(axis, a, centre).apply(moved)) for a in angles]
+        [target.residual(axis_rotation(axis, a, centre).apply(moved)) for a in angles]
     )
     good = residuals <= residuals.min() * (1.0 + tolerance) + target.ripple + 1e-12
     sizes = [axis_rotation(axis, a, centre).compose(transform).rotation_angle() for a in angles]
@@ -168,8 +169,6 @@ def _affine_rotation(transform, sv, sf, tv, tf, target, sample):
     """``transform`` corrected by the rotation of the affine fit between the moved source and
     the target (its polar factor): the rigid motion left once size and elongation are fitted,
     which a rigid fit between shapes of different proportions tilts by a few degrees."""
-    from .affine import affine_icp
-
     moved = transform.apply(sv)
     try:
         with np.errstate(all="ignore"):
@@ -241,7 +240,7 @@ def fit_rigid(
     else:
         fits = [icp_align(sv, sf, tv, tf, scale=scale, initial=s, surface=False)[0]
                 for s in icp_starts(sv, sf, tv, tf)]  # fmt: skip
-        residuals = np.array([_residual(target, f.apply(sample)) for f in fits])
+        residuals = np.array([target.residual(f.apply(sample)) for f in fits])
         good = residuals <= residuals.min() * (1.0 + tolerance) + target.ripple + 1e-12
         pick = int(np.argmin([f.rotation_angle() if g else np.inf for f, g in zip(fits, good)]))
         fitted = _affine_rotation(fits[pick], sv, sf, tv, tf, target, sample)
