@@ -51,6 +51,7 @@ from ladders.study.cohort import MotionAbnormality  # noqa: E402
 from ladders.study.population import (  # noqa: E402
     load_transported_motion,
     make_two_group_cohort,
+    read_scores_csv,
     score_transports,
     scores_csv,
     scores_markdown,
@@ -158,6 +159,35 @@ def _motions(work: Path, arm: str, name: str, subjects=None):
     return motions
 
 
+def _note(data, labels, n_permutations: int, repetitions: int | None) -> str:
+    return (
+        f"{data.region.abnormality.describe()}; {len(labels)} subjects "
+        f"({int(labels.sum())} patients); {int(data.region.affected.sum())} of "
+        f"{data.region.weight.size} atlas vertices affected; {n_permutations:,} "
+        "permutations; FWER under the null: "
+        + (f"{repetitions} random splits of the same subjects without the abnormality."
+           if repetitions else "not measured in this arm.")
+    )  # fmt: skip
+
+
+def republish(work: Path, n_permutations: int, repetitions: int) -> None:
+    """Publish the tables again from the stored scores (``scores_<tag>.csv``), e.g. after a
+    change of the table's layout, without scoring again."""
+    for path in sorted(work.glob("scores_*.csv")):
+        tag = path.stem.removeprefix("scores_")
+        scores = read_scores_csv(path.read_text())
+        keep = int(tag.rsplit("_", 1)[1]) if tag.rsplit("_", 1)[1].isdigit() else None
+        arm = next(a for a in sorted(ARMS, key=len, reverse=True) if tag.startswith(a + "_"))
+        name = tag.removeprefix(arm + "_").removesuffix("" if keep is None else f"_{keep}")
+        data = _cohort(name, 40)
+        subjects = list(_motions(work, arm, name)[0].subjects)[:keep]
+        labels = np.array([data.groups[s] == "patients" for s in subjects])
+        has_null = any(s.fwer is not None for s in scores)
+        note = _note(data, labels, n_permutations, repetitions if has_null else None)
+        publish(f"population_{tag}", f"{note}\n\n{scores_markdown(scores)}",
+                "python benchmarks/bench_population.py")  # fmt: skip
+
+
 def _score(work, arm, name, n_permutations, repetitions, keep=None):
     """Score one arm and cohort (its first ``keep`` subjects when given); publish the table."""
     motions = _motions(work, arm, name)
@@ -188,14 +218,7 @@ def _score(work, arm, name, n_permutations, repetitions, keep=None):
     plot_transport_scores(scores, work / f"scores_{tag}.png")
     plot_transport_scores(scores, DOCS_IMAGES / f"population_{tag}.png")
     print(f"\n{tag} ({len(labels)} subjects, {seconds:.0f} s):\n{table}", flush=True)
-    note = (
-        f"{data.region.abnormality.describe()}; {len(labels)} subjects "
-        f"({int(labels.sum())} patients); {int(data.region.affected.sum())} of "
-        f"{data.region.weight.size} atlas vertices affected; {n_permutations:,} "
-        "permutations; FWER under the null: "
-        + (f"{repetitions} random splits of the same subjects without the abnormality."
-           if nulls else "not measured in this arm.")
-    )  # fmt: skip
+    note = _note(data, labels, n_permutations, repetitions if nulls else None)
     publish(f"population_{tag}", f"{note}\n\n{table}", "python benchmarks/bench_population.py")
 
 
@@ -212,7 +235,8 @@ def run_analysis(work: Path, arms, cohorts, n_permutations: int, repetitions: in
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--stage", choices=("studies", "analysis", "all"), default="all")
+    parser.add_argument("--stage", choices=("studies", "analysis", "all", "tables"),
+                        default="all", help="'tables': publish again from the stored scores")  # fmt: skip
     parser.add_argument("--work", type=Path, default=Path("symladders-output/bench_population"))
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--jobs", type=int, default=2)
@@ -224,6 +248,8 @@ def main(argv=None) -> None:
     print(machine(), flush=True)
     if args.stage in ("studies", "all"):
         run_studies(args.work, args.jobs, _plan(args.quick, args.arms, args.cohorts, args.alpha2))
+    if args.stage == "tables":
+        republish(args.work, 2000 if args.quick else 10000, 50 if args.quick else 200)
     if args.stage in ("analysis", "all"):
         run_analysis(args.work, args.arms, args.cohorts, 2000 if args.quick else 10000,
                      50 if args.quick else 200)  # fmt: skip

@@ -39,6 +39,7 @@ __all__ = [
     "null_false_positive_rate",
     "score_transports",
     "scores_csv",
+    "read_scores_csv",
     "scores_markdown",
 ]
 
@@ -215,6 +216,26 @@ def score_transports(
     return scores, comparisons
 
 
+def read_scores_csv(text: str) -> list[TransportScore]:
+    """The scores of :func:`scores_csv`'s text (empty fields are None)."""
+    kinds = {f: TransportScore.__annotations__[f] for f in TransportScore.__annotations__}
+    out = []
+    for row in csv.DictReader(io.StringIO(text)):
+        values = {}
+        for key, value in row.items():
+            kind = str(kinds[key])
+            if value in ("", "None"):
+                values[key] = None
+            elif "float" in kind:
+                values[key] = float(value)
+            elif kind.startswith("int"):
+                values[key] = int(value)
+            else:
+                values[key] = value
+        out.append(TransportScore(**values))
+    return out
+
+
 def scores_csv(scores: list[TransportScore]) -> str:
     """The scores as CSV, one row per motion."""
     out = io.StringIO()
@@ -231,10 +252,12 @@ def _fmt(value, digits: int = 2) -> str:
 
 
 def scores_markdown(scores: list[TransportScore]) -> str:
-    """A Markdown table of the scores (power, Dice, AUC [CI], null FWER [CI])."""
+    """A Markdown table of the scores: power and Dice of the displacement test, power / Dice
+    of the normal-motion, wall-motion and strain tests, AUC [CI], global p, null FWER [CI]."""
     lines = [
-        "| transport | alpha^2 | power | Dice | normal-motion power | wall-motion power | "
-        "strain power | AUC [95 % CI] | global p | FWER under the null [95 % CI] |",
+        "| transport | alpha^2 | power | Dice | normal-motion power / Dice | wall-motion power "
+        "/ Dice | strain power / Dice | AUC [95 % CI] | global p | FWER under the null "
+        "[95 % CI] |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s in scores:
@@ -245,8 +268,9 @@ def scores_markdown(scores: list[TransportScore]) -> str:
             name = f"{s.deformation.upper()} {s.label}"
         lines.append(
             f"| {name} | {alpha2} | "
-            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.normal_power)} | "
-            f"{_fmt(s.wall_power)} | {_fmt(s.strain_power)} | "
+            f"{_fmt(s.power)} | {_fmt(s.dice)} | {_fmt(s.normal_power)} / "
+            f"{_fmt(s.normal_dice)} | {_fmt(s.wall_power)} / {_fmt(s.wall_dice)} | "
+            f"{_fmt(s.strain_power)} / {_fmt(s.strain_dice)} | "
             f"{s.auc:.2f} [{s.auc_low:.2f}, {s.auc_high:.2f}] | {s.global_p:.2g} | {fwer} |"
         )
     return "\n".join(lines) + "\n"
