@@ -109,7 +109,7 @@ class CorrespondenceSettings:
     final_procrustes : bool
         Align the corresponded pair onto the atlas by Procrustes on its vertices.
     es_template : {"ed", "atlas"}
-        The template end-systole is registered from.
+        The template end-systole is registered from (``es_correspondence="registration"``).
     flag_mean_distance, flag_hausdorff : float
         A corresponded mesh farther than these from its input (mean surface
         distance, Hausdorff distance) is flagged for inspection.
