@@ -337,8 +337,8 @@ def test_scores_and_outputs_carry_the_wall_motion(planted, tmp_path):
     assert header[:6] == ["name", "method", "label", "deformation", "alpha2", "power"]
     assert header[-2:] == ["wall_power", "wall_dice"]
     table = scores_markdown(scores).splitlines()
-    column = table[0].split("|").index(" wall-motion power ")
-    assert table[2].split("|")[column].strip() == f"{s.wall_power:.2f}"
+    column = table[0].split("|").index(" wall-motion power / Dice ")
+    assert table[2].split("|")[column].strip() == f"{s.wall_power:.2f} / {s.wall_dice:.2f}"
 
     paths = write_analysis(tmp_path, comparisons, c, 0.05, data.region.weight, scores,
                            "truth", "header", figures=False)  # fmt: skip
