@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
 from ladders.statistics import (
     ClassifierResult,
@@ -52,6 +51,7 @@ from manifolds.validation import check_int, check_rng
 from ..area_strain import area_strain
 from ..errors import CohortError
 from ..volume import enclosed_volume
+from ..wall_motion import outward_vertex_normals
 from .transported_motion import NO_TRANSPORT, TransportedMotion
 
 __all__ = [
@@ -199,12 +199,6 @@ def normalize_motion(
     return out, scales
 
 
-def _outward_normals(atlas, faces) -> np.ndarray:
-    """Unit vertex normals of the atlas, oriented outward (the enclosed volume positive)."""
-    normals = np.asarray(trimesh.Trimesh(atlas, faces, process=False).vertex_normals, dtype=float)
-    return normals if enclosed_volume(atlas, faces) >= 0 else -normals
-
-
 def _strain(atlas, faces, displacement) -> np.ndarray:
     return np.stack([area_strain(atlas, atlas + d, faces) for d in displacement])
 
@@ -266,7 +260,7 @@ def compare_groups(
     )
     strain = vertexwise_test(motion.strain, labels, n_permutations, rng=rng, progress=progress)
     along = np.einsum(
-        "nkd,kd->nk", motion.displacement, _outward_normals(motion.atlas, motion.faces)
+        "nkd,kd->nk", motion.displacement, outward_vertex_normals(motion.atlas, motion.faces)
     )
     normal = vertexwise_test(along, labels, n_permutations, rng=rng, progress=progress)
     space = Euclidean(motion.atlas.shape)
