@@ -60,8 +60,25 @@ def add_analyze_parser(sub) -> None:
     )
     p.add_argument("study", type=existing_folder, metavar="STUDY_OUTPUT",
                    help="folder written by 'symladders study'")  # fmt: skip
-    p.add_argument("--groups", type=_existing_file, required=True,
+    p.add_argument("--groups", type=_existing_file, default=None,
                    help="CSV table with the columns subject and group")  # fmt: skip
+    p.add_argument("--design", type=_existing_file, default=None,
+                   help="CSV design table: a column subject and any covariates (a linear model "
+                        "per vertex instead of two groups; with --model and --contrast)")  # fmt: skip
+    p.add_argument("--model", default=None, metavar="FORMULA",
+                   help="model formula on the design's columns, e.g. 'group + age + sex'")  # fmt: skip
+    p.add_argument("--contrast", nargs="+", default=None, metavar="SPEC",
+                   help="contrasts to test, e.g. 'group[patients] - group[controls]', 'age', "
+                        "or 'group' (F test over its levels)")  # fmt: skip
+    p.add_argument("--blocks", default=None, metavar="COLUMN",
+                   help="a design column of exchangeability blocks (e.g. site): permutations "
+                        "within blocks")  # fmt: skip
+    p.add_argument("--tfce", action="store_true",
+                   help="also threshold-free cluster enhancement (H = 2, E = 1) on the atlas's "
+                        "triangles, with its own family-wise p-values")  # fmt: skip
+    p.add_argument("--aha", type=_existing_file, default=None, metavar="LANDMARKS",
+                   help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
+                        "landmark table's row 'atlas'): tables and bull's-eyes per AHA segment")  # fmt: skip
     p.add_argument("--compare", type=_pair, default=None, metavar="A,B",
                    help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
     p.add_argument("--truth", type=_existing_file, default=None,
@@ -96,6 +113,10 @@ def run_analyze_command(args) -> int:
     from ..errors import CohortError
     from ..population import analyze, read_planted_region
 
+    if (args.groups is None) == (args.design is None):
+        raise UsageError("symladders analyze: error: give --groups or --design (one of them)")
+    if args.design is not None:
+        return _run_model(args)
     if args.null is not None and args.truth is None:
         raise UsageError("symladders analyze: error: --null needs --truth (the planted region)")
     if not args.alpha < 1:
@@ -131,8 +152,64 @@ def run_analyze_command(args) -> int:
         f"AUC {c.classifier.auc:.2f} [{c.classifier.ci_low:.2f}, {c.classifier.ci_high:.2f}]"
     )
     folder = Path(outcome.paths["summary.md"]).parent
+    if args.tfce or args.aha is not None:
+        args.design_table = {"subject": list(groups), "group": list(groups.values())}
+        args.model = "group"
+        args.contrast = [f"group[{c.groups[0]}] - group[{c.groups[1]}]"]
+        _run_model(args)
     print(
         f"Tables, maps and figures in {folder}: "
         + ", ".join(Path(p).name for p in outcome.paths.values())
     )
+    return 0
+
+
+def _run_model(args) -> int:
+    """The linear-model analysis (``--design``, or the groups with ``--tfce`` / ``--aha``)."""
+    from ladders.statistics import read_design
+
+    from ..errors import CohortError
+    from ..population import analyze_model, read_aha_landmarks
+
+    if args.model is None or not args.contrast:
+        raise UsageError("symladders analyze: error: --design needs --model and --contrast")
+    if not args.alpha < 1:
+        raise UsageError(
+            f"symladders analyze: error: --alpha: expected a level in (0, 1), got {args.alpha}"
+        )
+    try:
+        table = getattr(args, "design_table", None)
+        if table is None:
+            table = read_design(args.design)
+        if args.groups is not None and args.compare is not None:  # the two groups compared
+            keep = [g in args.compare for g in table["group"]]
+            table = {k: [v for v, y in zip(col, keep) if y] for k, col in table.items()}
+        landmarks = None if args.aha is None else read_aha_landmarks(args.aha)
+        outcome = analyze_model(
+            args.study, table, args.model, args.contrast, args.output, alpha2=args.alpha2,
+            methods=args.transport, n_permutations=args.permutations, tfce=args.tfce,
+            aha_landmarks=landmarks, blocks=args.blocks,
+            normalize=None if args.normalize == "none" else args.normalize, alpha=args.alpha,
+            seed=args.seed, progress=not args.no_progress, figures=not args.no_figures,
+        )  # fmt: skip
+    except (CohortError, ValueError) as exc:
+        raise UsageError(f"symladders analyze: error: {exc}") from None
+    k = outcome.comparisons[0].motion.atlas.shape[0]
+    n = len(outcome.comparisons[0].design.subjects)
+    print(f"symladders analyze: model '{args.model}', {n} subjects, "
+          f"{len(outcome.comparisons)} motion(s) x contrast(s), {k} atlas vertices")  # fmt: skip
+    if outcome.left_out:
+        print(f"left out (not in the design): {', '.join(outcome.left_out)}")
+    for c in outcome.main:
+        counts = ", ".join(
+            f"{test} {int(c.detected(args.alpha, test).sum())}"
+            + (f" (TFCE {int(c.detected(args.alpha, test, tfce=True).sum())})" if args.tfce else "")
+            for test in ("displacement", "normal", "strain", "wall_motion")
+        )
+        print(
+            f"{c.motion.label}, '{c.contrast}': vertices detected (FWER {args.alpha:g}): {counts}"
+        )
+    folder = Path(outcome.paths["model_summary.md"]).parent
+    print(f"Model tables, maps and figures in {folder}: "
+          + ", ".join(Path(p).name for p in outcome.paths.values()))  # fmt: skip
     return 0

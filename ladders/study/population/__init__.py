@@ -9,7 +9,14 @@
 - :mod:`.against_truth`: power, Dice, AUC and the false-positive rate under the null
   of every transport (:func:`score_transports`);
 - :mod:`.analysis`: the whole analysis of a study folder (:func:`analyze`), as
-  ``symladders analyze`` runs it; :mod:`.analysis_outputs`: its files.
+  ``symladders analyze`` runs it; :mod:`.analysis_outputs`: its files;
+- :mod:`.aha_model`: the AHA 17 segments on any atlas mesh from three landmarks
+  (:func:`aha_segments`); :mod:`.segment_table`: the groups compared per segment
+  (:func:`segment_table`);
+- :mod:`.model_comparison`: a linear model's contrast tested per vertex (covariates,
+  several groups, TFCE) and per AHA segment (:func:`compare_model`);
+  :mod:`.model_analysis`: the analysis of a study folder with a design table
+  (:func:`analyze_model`), as ``symladders analyze --design`` runs it.
 
 The statistics themselves are generic and live in :mod:`ladders.statistics`.
 """
@@ -23,6 +30,7 @@ from .against_truth import (
     scores_csv,
     scores_markdown,
 )
+from .aha_model import AHA_NAMES, aha_segments, read_aha_landmarks
 from .analysis import (
     AnalysisOutcome,
     analyze,
@@ -32,6 +40,9 @@ from .analysis import (
 )
 from .analysis_outputs import write_analysis
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
+from .model_analysis import ModelOutcome, analyze_model, check_design_table
+from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
+from .segment_table import SegmentTable, segment_means, segment_table
 from .transported_motion import (
     NO_TRANSPORT,
     StudyResults,
@@ -52,6 +63,19 @@ from .two_groups import (
 )
 
 __all__ = [
+    "ModelOutcome",
+    "analyze_model",
+    "check_design_table",
+    "MODEL_TESTS",
+    "ModelComparison",
+    "compare_model",
+    "model_responses",
+    "AHA_NAMES",
+    "aha_segments",
+    "read_aha_landmarks",
+    "SegmentTable",
+    "segment_means",
+    "segment_table",
     "NullRate",
     "TransportScore",
     "null_false_positive_rate",

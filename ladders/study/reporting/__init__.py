@@ -3,10 +3,12 @@
 - :mod:`.report`: the Table-1-style summary and :func:`write_report`;
 - :mod:`.statistics`: the tidy table and the paired comparison;
 - :mod:`.figures`: Fig. 4, Fig. 5a and Fig. 5b;
+- :mod:`.bullseye`: the AHA 17-segment bull's-eye plot;
 - :mod:`.deformation_comparison`: LDDMM against SVF on the same subjects;
 - :mod:`.rows`: the typed rows of those tables.
 """
 
+from .bullseye import bullseye_figure, bullseye_plot
 from .deformation_comparison import (
     compare_deformations,
     comparison_csv,
@@ -18,6 +20,8 @@ from .rows import DeformationComparisonRow, PairedComparison, PairedRow, Summary
 from .statistics import paired_comparison, paired_statistics, tidy_rows
 
 __all__ = [
+    "bullseye_plot",
+    "bullseye_figure",
     "summarize",
     "summary_markdown",
     "terminal_summary",

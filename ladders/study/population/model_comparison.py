@@ -1,0 +1,200 @@
+"""A linear model of the transported motion on the atlas: covariates, several groups, TFCE, AHA.
+
+:func:`compare_model` is :func:`~.group_comparison.compare_groups` generalised to
+any design (:func:`ladders.statistics.design_matrix`, e.g. ``"group + age + sex"``)
+and contrast (``"group[patients] - group[controls]"``, ``"age"``, or ``"group"``
+for an F test over all its levels). At every atlas vertex it tests, by
+:func:`ladders.statistics.glm_test` (Freedman-Lane permutations, maximum statistic
+over the vertices for the family-wise error):
+
+* the displacement vectors ``T' - T`` (Pillai's trace, multivariate);
+* their component along the atlas's outward normal, the area strain and the normal
+  wall motion (``t`` for a one-row contrast, ``F`` otherwise).
+
+Options:
+
+* ``tfce=True``: threshold-free cluster enhancement on the atlas's triangle
+  adjacency (:func:`ladders.statistics.tfce`, ``H = 2``, ``E = 1``, both tails
+  of a ``t``), with its own family-wise error from the same permutations;
+* ``segments``: the AHA segment of each atlas vertex
+  (:func:`~.aha_model.aha_segments`): the same model on each subject's mean over each
+  of the 17 segments, corrected over the segments.
+
+For the two-group design ``"group"`` and the contrast of the two levels, the
+statistics are those of :func:`~.group_comparison.compare_groups` (``t`` equal,
+Pillai's ``V`` a monotone map of Hotelling's ``T^2``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ladders.statistics import (
+    Design,
+    contrast_matrix,
+    fit_statistic,
+    glm_test,
+    mesh_adjacency,
+    tfce_enhancer,
+    tfce_step,
+    two_sided,
+)
+from manifolds.validation import check_int, check_rng
+
+from ..errors import CohortError
+from ..wall_motion import outward_vertex_normals
+from .segment_table import segment_means
+from .transported_motion import TransportedMotion
+
+__all__ = ["MODEL_TESTS", "TFCE_HEIGHT", "TFCE_EXTENT", "ModelComparison", "compare_model",
+           "model_responses"]  # fmt: skip
+
+#: The per-vertex tests of a :class:`ModelComparison`.
+MODEL_TESTS = ("displacement", "normal", "strain", "wall_motion")
+#: TFCE's height and extent exponents on a surface (FSL PALM's ``-tfce2D``).
+TFCE_HEIGHT, TFCE_EXTENT = 2.0, 1.0
+
+
+@dataclass(frozen=True)
+class ModelComparison:
+    """One contrast of the linear model tested on one motion (:func:`compare_model`).
+
+    Attributes
+    ----------
+    motion : TransportedMotion
+    design : Design
+    contrast : str
+        The contrast's name.
+    tests : dict of str to GLMTest
+        Per test of :data:`MODEL_TESTS`, the per-vertex test (with the TFCE map and
+        its p-values when asked for).
+    effects : dict of str to ndarray
+        The contrast's estimate per vertex, ``(k,)`` for the scalars and ``(k, 3)``
+        for the displacement, for one-row contrasts (an F test has none: empty).
+    segments : ndarray of int, shape (k,), or None
+        The AHA segment (1-17) of each atlas vertex.
+    segment_tests : dict of str to GLMTest, or None
+        The same tests on the subjects' segment means, corrected over the 17 segments.
+    segment_effects : dict of str to ndarray, or None
+    """
+
+    motion: TransportedMotion
+    design: Design
+    contrast: str
+    tests: dict
+    effects: dict
+    segments: np.ndarray | None = None
+    segment_tests: dict | None = None
+    segment_effects: dict | None = None
+
+    def detected(self, alpha: float = 0.05, test: str = "normal", tfce: bool = False):
+        """Vertices whose family-wise corrected p-value (of the TFCE map if ``tfce``) is below
+        ``alpha``."""
+        if test not in MODEL_TESTS:
+            raise ValueError(f"test: expected one of {MODEL_TESTS}, got {test!r}")
+        result = self.tests[test]
+        if tfce and result.p_fwer_enhanced is None:
+            raise ValueError("tfce: this comparison was made without TFCE")
+        return result.significant(alpha, enhanced=tfce)
+
+
+def model_responses(motion: TransportedMotion) -> dict:
+    """The responses of the per-vertex tests: ``{name: (n, k, 3) or (n, k)}``."""
+    normals = outward_vertex_normals(motion.atlas, motion.faces)
+    return {
+        "displacement": motion.displacement,
+        "normal": np.einsum("nkd,kd->nk", motion.displacement, normals),
+        "strain": motion.strain,
+        "wall_motion": motion.wall_motion,
+    }
+
+
+def _effects(y: np.ndarray, x: np.ndarray, c: np.ndarray) -> np.ndarray | None:
+    """``C beta`` per vertex (and component) for a one-row contrast, else None."""
+    if c.shape[0] != 1:
+        return None
+    beta = np.linalg.lstsq(x, y.reshape(len(y), -1), rcond=None)[0]
+    return (c @ beta).reshape(y.shape[1:])
+
+
+def _enhancer(statistic: np.ndarray, kind: str, adjacency):
+    signed = kind == "t"
+    step = tfce_step(statistic, two_sided=signed)
+    if step <= 0:  # nothing above zero: enhance nothing
+        return lambda maps: np.zeros_like(maps)
+    base = tfce_enhancer(adjacency, TFCE_HEIGHT, TFCE_EXTENT, step=step)
+    return two_sided(base) if signed else base
+
+
+def compare_model(
+    motion: TransportedMotion,
+    design: Design,
+    contrast,
+    n_permutations: int = 10000,
+    rng: np.random.Generator | None = None,
+    *,
+    tfce: bool = False,
+    segments=None,
+    blocks=None,
+    method: str = "freedman_lane",
+    progress: bool = False,
+) -> ModelComparison:
+    """Test one contrast of a linear model at every atlas vertex (see the module).
+
+    Parameters
+    ----------
+    motion : TransportedMotion
+        Its subjects in the order of ``design.subjects``.
+    design : Design
+        From :func:`ladders.statistics.design_matrix` on the subjects of ``motion``.
+    contrast : str or array, shape (q, p)
+        :func:`ladders.statistics.contrast_matrix`.
+    n_permutations : int, default 10000
+    rng : numpy.random.Generator
+        Draws the permutations (required).
+    tfce : bool
+        Also the TFCE maps and their family-wise p-values.
+    segments : int array, shape (k,), optional
+        The AHA segment of each atlas vertex: also the segment tests.
+    blocks : array, shape (n,), optional
+        Exchangeability blocks (e.g. the site): permutations within blocks only.
+    method : {"freedman_lane", "manly", "draper_stoneman"}
+    progress : bool
+
+    Returns
+    -------
+    ModelComparison
+    """
+    rng = check_rng(rng)
+    n_permutations = check_int(n_permutations, "n_permutations", minimum=1)
+    if list(design.subjects) != list(motion.subjects):
+        raise CohortError("design: its subjects are not the motion's, in the motion's order")
+    name, c = contrast_matrix(design, contrast)
+    responses = model_responses(motion)
+    adjacency = mesh_adjacency(motion.faces, motion.atlas.shape[0]) if tfce else None
+    tests, effects = {}, {}
+    for test in MODEL_TESTS:
+        y = responses[test]
+        enhance = None
+        if tfce:
+            observed = fit_statistic(y, design.matrix, c, ridge=1e-9 if y.ndim == 3 else 0.0)
+            enhance = _enhancer(observed.statistic, observed.kind, adjacency)
+        tests[test] = glm_test(y, design, c, n_permutations, rng, method, blocks, enhance,
+                               progress=progress)  # fmt: skip
+        effect = _effects(y, design.matrix, c)
+        if effect is not None:
+            effects[test] = effect
+    segment_tests = segment_effects = None
+    if segments is not None:
+        segments = np.asarray(segments)
+        segment_tests, segment_effects = {}, {}
+        for test in MODEL_TESTS:
+            y = segment_means(responses[test], segments)
+            segment_tests[test] = glm_test(y, design, c, n_permutations, rng, method, blocks)
+            effect = _effects(y, design.matrix, c)
+            if effect is not None:
+                segment_effects[test] = effect
+    return ModelComparison(motion, design, name, tests, effects, segments, segment_tests,
+                           segment_effects)  # fmt: skip
