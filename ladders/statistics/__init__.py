@@ -18,6 +18,9 @@ SPD matrices as on LDDMM momenta; the group tests and the linear model take arra
 - :mod:`.permutation_glm`: :func:`glm_test` (Freedman-Lane, Manly or Draper-Stoneman
   permutations, within blocks, family-wise error of the maximum, optional enhancement),
   :func:`permutation_indices`, :func:`two_sided`;
+- :mod:`.survival`: :func:`cross_validated_c_index` and
+  :func:`cross_validated_c_index_from_motion` (Cox regression, lifelines; cross-validated
+  C-index with a bootstrap interval), :func:`c_index`, :func:`simulate_survival`;
 - :mod:`.tfce`: :func:`tfce` (threshold-free cluster enhancement on a mesh's
   adjacency), :func:`tfce_enhancer` (the ``enhance`` of :func:`glm_test`),
   :func:`tfce_step`, :func:`mesh_adjacency`.
@@ -32,6 +35,13 @@ from .detection import binomial_interval, detection_power, dice
 from .group_tests import GlobalTest, VertexwiseTest, check_groups, global_test, vertexwise_test
 from .linear_model import LinearFit, contrast_bases, fit_statistic, pillai_f, pillai_to_hotelling
 from .permutation_glm import METHODS, GLMTest, glm_test, permutation_indices, two_sided
+from .survival import (
+    SurvivalResult,
+    c_index,
+    cross_validated_c_index,
+    cross_validated_c_index_from_motion,
+    simulate_survival,
+)
 from .tangent_pca import METRICS, TangentPCA, mode_shapes, tangent_mean, tangent_pca
 from .tfce import mesh_adjacency, tfce, tfce_enhancer, tfce_step
 
@@ -66,6 +76,11 @@ __all__ = [
     "glm_test",
     "permutation_indices",
     "two_sided",
+    "SurvivalResult",
+    "c_index",
+    "cross_validated_c_index",
+    "cross_validated_c_index_from_motion",
+    "simulate_survival",
     "mesh_adjacency",
     "tfce",
     "tfce_enhancer",

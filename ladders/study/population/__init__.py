@@ -2,6 +2,9 @@
 
 - :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
   motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
+- :mod:`.covariate_cohort`: the synthetic cohort in several groups (planted abnormalities,
+  anatomy shifts) with age, sex and body size acting on the shapes, and its design table
+  (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`);
 - :mod:`.transported_motion`: the subjects' transported motion on the atlas, read
   from a study's results (:class:`TransportedMotion`, :func:`load_transported_motion`);
 - :mod:`.group_comparison`: per-vertex tests with family-wise error control, a
@@ -39,6 +42,15 @@ from .analysis import (
     select_motions,
 )
 from .analysis_outputs import write_analysis
+from .covariate_cohort import (
+    DESIGN_FILE,
+    AnatomyShift,
+    CohortGroup,
+    CovariateCohort,
+    Covariates,
+    make_covariate_cohort,
+    write_covariate_cohort,
+)
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
 from .model_analysis import ModelOutcome, analyze_model, check_design_table
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
@@ -107,4 +119,11 @@ __all__ = [
     "TwoGroupCohort",
     "make_two_group_cohort",
     "write_two_group_cohort",
+    "AnatomyShift",
+    "CohortGroup",
+    "CovariateCohort",
+    "Covariates",
+    "DESIGN_FILE",
+    "make_covariate_cohort",
+    "write_covariate_cohort",
 ]

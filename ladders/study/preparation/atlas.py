@@ -130,6 +130,7 @@ def _aligned_targets(
         else:
             fit = fit_rigid(
                 v, f, start_v, start_f, tolerance=settings.rotation_tolerance,
+                start_tolerance=settings.start_tolerance,
                 source_landmarks=None if landmarks is None else landmarks[i],
                 target_landmarks=start_lm,
             )  # fmt: skip

@@ -91,8 +91,15 @@ class CorrespondenceSettings:
         Rigid alignment of end-diastole onto the atlas before the registration
         (:func:`~.rigid_fit.fit_rigid`, with landmarks where given).
     rotation_tolerance : float
-        Rigid fits whose residual is within this fraction of the best are equally
-        good; the smallest rotation among them is kept (``fit_rigid``'s ``tolerance``).
+        Turns about the long axis whose residual is within this fraction of the best
+        are equally good; the smallest rotation among them is kept (``fit_rigid``'s
+        ``tolerance``; 5 % lets two different ventricles keep the input's turn, where
+        their own shapes prefer another by a few per cent).
+    start_tolerance : float
+        ICP fits from the different starts whose residual is within this fraction of
+        the best are equally good; the smallest rotation among them is kept
+        (``fit_rigid``'s ``start_tolerance``: a flipped fit between two different
+        ventricles can fit a few per cent better than the true one).
     es_correspondence : {"normal", "registration"}
         How end-systole gets the atlas's vertices: the corresponded end-diastole
         moved by its affine fit, then along its normals onto the end-systolic surface
@@ -133,7 +140,8 @@ class CorrespondenceSettings:
     es_template: str = "ed"
     flag_mean_distance: float = 0.5
     flag_hausdorff: float = 3.0
-    rotation_tolerance: float = 0.01
+    rotation_tolerance: float = 0.05
+    start_tolerance: float = 0.10
     es_correspondence: str = "normal"
     normal_max_distance: float | None = None
     landmark_tolerance: float = 10.0
@@ -152,6 +160,7 @@ class CorrespondenceSettings:
                     "flag_landmark_disagreement"):  # fmt: skip
             check_float(getattr(self, key), f"{name}: {key}", minimum=0.0, strict=True)
         check_float(self.rotation_tolerance, f"{name}: rotation_tolerance", minimum=0.0)
+        check_float(self.start_tolerance, f"{name}: start_tolerance", minimum=0.0)
         if self.normal_max_distance is not None:
             check_float(self.normal_max_distance, f"{name}: normal_max_distance", minimum=0.0,
                         strict=True)  # fmt: skip
@@ -270,7 +279,8 @@ def correspond_mesh(
         if settings.alignment == "icp":
             av, af = (tv, tf) if align_to is None else align_to
             fit = fit_rigid(mv, mf, av, af, scale=settings.scale,
-                            tolerance=settings.rotation_tolerance, source_landmarks=landmarks,
+                            tolerance=settings.rotation_tolerance,
+                            start_tolerance=settings.start_tolerance, source_landmarks=landmarks,
                             target_landmarks=template_landmarks)  # fmt: skip
             transform = fit.transform
     moved = transform.apply(mv)

@@ -8,15 +8,16 @@ consistent across subjects, or with anatomical landmarks that fix it. So
 
 1. runs ICP (:func:`~.alignment.icp_align`, point to point) from the input's own
    orientation and from the principal-axes starts, and among the fits whose
-   residual (mean point-to-plane distance to the target) is within ``tolerance``
+   residual (mean point-to-plane distance to the target) is within ``start_tolerance``
    (relative, plus the triangulation's own ripple) of the best, keeps the smallest
-   rotation;
+   rotation (between two different ventricles a flipped fit can fit a few per cent
+   better than the true one: 10 % keeps the input's orientation);
 2. replaces its rotation by that of the affine fit between the moved mesh and the
    target (the polar factor of :func:`~.affine.affine_icp`): the rigid motion left
    once size and elongation are fitted, which a rigid fit between ventricles of
    different proportions tilts by a few degrees;
 3. scans the turns about the target's long axis (through its centroid, every
-   degree): the arc of turns whose residual stays within the tolerance of the best
+   degree): the arc of turns whose residual stays within ``tolerance`` of the best
    is the *axial spread*, the turns the surface cannot tell apart (360 for a surface
    of revolution). Within it, the turn giving the smallest total rotation is
    applied: a subject already in the atlas's orientation stays there, a posed one is
@@ -191,7 +192,8 @@ def fit_rigid(
     target_faces,
     *,
     scale: bool = False,
-    tolerance: float = 0.01,
+    tolerance: float = 0.05,
+    start_tolerance: float = 0.10,
     source_landmarks: Landmarks | None = None,
     target_landmarks: Landmarks | None = None,
 ) -> AlignmentFit:
@@ -205,9 +207,12 @@ def fit_rigid(
         The fixed surface (e.g. the atlas).
     scale : bool, default False
         Fit a similarity instead of a rigid motion.
-    tolerance : float, default 0.01
-        Fits whose residual is at most ``(1 + tolerance)`` times the best (plus 2 % of the
-        target's mean edge length, the triangulation's own ripple) are equally good.
+    tolerance : float, default 0.05
+        Turns about the long axis whose residual is at most ``(1 + tolerance)`` times the
+        best (plus 2 % of the target's mean edge length, the triangulation's own ripple)
+        are equally good.
+    start_tolerance : float, default 0.10
+        The same for the ICP fits from the different starts.
     source_landmarks, target_landmarks : Landmarks, optional
         Both or neither: the landmarks of the source (in its own frame) and of the target.
 
@@ -218,6 +223,7 @@ def fit_rigid(
     sv, sf = check_mesh(source_vertices, source_faces, "fit_rigid: source")
     tv, tf = check_mesh(target_vertices, target_faces, "fit_rigid: target")
     tolerance = check_float(tolerance, "fit_rigid: tolerance", minimum=0.0)
+    start_tolerance = check_float(start_tolerance, "fit_rigid: start_tolerance", minimum=0.0)
     if (source_landmarks is None) != (target_landmarks is None):
         raise ValueError("fit_rigid: source_landmarks and target_landmarks: give both or neither")
     target = _Surface(tv, tf)
@@ -241,7 +247,7 @@ def fit_rigid(
         fits = [icp_align(sv, sf, tv, tf, scale=scale, initial=s, surface=False)[0]
                 for s in icp_starts(sv, sf, tv, tf)]  # fmt: skip
         residuals = np.array([target.residual(f.apply(sample)) for f in fits])
-        good = residuals <= residuals.min() * (1.0 + tolerance) + target.ripple + 1e-12
+        good = residuals <= residuals.min() * (1.0 + start_tolerance) + target.ripple + 1e-12
         pick = int(np.argmin([f.rotation_angle() if g else np.inf for f, g in zip(fits, good)]))
         fitted = _affine_rotation(fits[pick], sv, sf, tv, tf, target, sample)
         turn, spread = _axial_scan(fitted, sample, target, axes[:, 0], centre, tolerance)
