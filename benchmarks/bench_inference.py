@@ -100,6 +100,10 @@ def _null(motion, segments, repetitions, permutations, seed):
     return {key: (h / repetitions, *binomial_interval(h, repetitions)) for key, h in hits.items()}
 
 
+def _label(motion) -> str:
+    return motion.label + ("" if motion.alpha2 is None else f", alpha^2 = {motion.alpha2:g}")
+
+
 def _fmt(rate):
     return f"{rate[0]:.3f} [{rate[1]:.3f}, {rate[2]:.3f}]"
 
@@ -139,7 +143,7 @@ def main(argv=None) -> None:
                     cells = (["-"] * 3 if null is None else
                              [_fmt(null[(test, i)]) for i in ("vertex", "tfce", "segments")])  # fmt: skip
                     lines.append(
-                        f"| {name.replace('_', ' ')} | {motion.label} | {test.replace('_', ' ')} "
+                        f"| {name.replace('_', ' ')} | {_label(motion)} | {test.replace('_', ' ')} "
                         f"| {s[0]:.2f} / {s[1]:.2f} | {s[2]:.2f} / {s[3]:.2f} | {s[4]} / {s[5]} | "
                         + " | ".join(cells)
                         + " |"
