@@ -115,11 +115,13 @@ def main(argv=None) -> None:
     parser.add_argument("--null-repetitions", type=int, default=100)
     parser.add_argument("--null-permutations", type=int, default=500)
     parser.add_argument("--alpha2", type=float, nargs="+", default=[1.0, 100.0])
+    parser.add_argument("--arms", nargs="+", choices=tuple(ARMS), default=list(ARMS))
     parser.add_argument("--publish", action="store_true")
     args = parser.parse_args(argv)
     print(machine(), flush=True)
     start = time.perf_counter()
-    for arm, arm_label in ARMS.items():
+    for arm in args.arms:
+        arm_label = ARMS[arm]
         nulls = {m.name: m for m in _motions(args.work, arm, "null", tuple(args.alpha2))}
         lines = [
             "| cohort | motion | test | vertex max-T power / Dice | TFCE power / Dice "

@@ -192,3 +192,42 @@ def test_cli_design_model_contrast_tfce_aha(default_study, tmp_path, capsys):
     assert "bmi" in capsys.readouterr().err
     assert main(["analyze", str(out / "study"), "--no-progress"]) == 2
     assert "--groups or --design" in capsys.readouterr().err
+
+
+def test_outcome_is_predicted_from_the_regional_motion(default_study, tmp_path, capsys):
+    """A survival outcome simulated from each subject's true regional normal motion is
+    predicted from the transported motion's PCA scores (C-index well above chance), not
+    from a baseline column of noise; bad outcome columns are refused."""
+    from ladders.statistics import simulate_survival
+
+    data, out = default_study
+    subjects = list(data.groups)
+    by_name = {s.name: s for s in data.cohort.subjects}
+    normals = outward_vertex_normals(data.cohort.atlas, data.cohort.faces)
+    regional = np.array([
+        np.einsum("kd,kd->k", by_name[s].es - by_name[s].ed, normals)[data.region.affected].mean()
+        for s in subjects
+    ])  # fmt: skip
+    rng = np.random.default_rng(8)
+    time, event = simulate_survival(2.0 * (regional - regional.mean()) / regional.std(), rng)
+    noise = rng.standard_normal(len(subjects))
+    design = tmp_path / "design.csv"
+    design.write_text("subject,time,event,noise\n" + "".join(
+        f"{s},{t:.6g},{int(e)},{x:.6g}\n" for s, t, e, x in zip(subjects, time, event, noise)))  # fmt: skip
+    code = main(["analyze", str(out / "study"), "--design", str(design), "--outcome",
+                 "time,event", "--baseline", "noise", "--transport", "pole_ladder_residual",
+                 "--no-progress", "-o", str(tmp_path / "o")])  # fmt: skip
+    assert code == 0
+    with open(tmp_path / "o" / "outcome.csv") as fh:
+        (row,) = list(csv.DictReader(fh))
+    assert float(row["c_index"]) > 0.7 and float(row["ci_low"]) > 0.5
+    assert float(row["difference_ci_low"]) > 0  # the motion beats the noise column
+    assert "C-index" in capsys.readouterr().out
+    bad = tmp_path / "bad.csv"
+    bad.write_text(design.read_text().replace(",1,", ",2,", 1))
+    assert main(["analyze", str(out / "study"), "--design", str(bad), "--outcome", "time,event",
+                 "--no-progress", "-o", str(tmp_path / "b")]) == 2  # fmt: skip
+    assert "0 or 1" in capsys.readouterr().err
+    assert main(["analyze", str(out / "study"), "--design", str(design), "--outcome",
+                 "followup,event", "--no-progress", "-o", str(tmp_path / "b")]) == 2  # fmt: skip
+    assert "followup" in capsys.readouterr().err

@@ -73,6 +73,13 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--blocks", default=None, metavar="COLUMN",
                    help="a design column of exchangeability blocks (e.g. site): permutations "
                         "within blocks")  # fmt: skip
+    p.add_argument("--outcome", type=_pair, default=None, metavar="TIME,EVENT",
+                   help="design columns of a survival outcome (follow-up time, event 1 or "
+                        "censored 0): Cox regression on the motion's PCA scores, cross-validated "
+                        "C-index per motion")  # fmt: skip
+    p.add_argument("--baseline", nargs="+", default=None, metavar="COLUMN",
+                   help="with --outcome: clinical design columns predicted alone for comparison "
+                        "(e.g. ejection_fraction)")  # fmt: skip
     p.add_argument("--tfce", action="store_true",
                    help="also threshold-free cluster enhancement (H = 2, E = 1) on the atlas's "
                         "triangles, with its own family-wise p-values")  # fmt: skip
@@ -171,8 +178,16 @@ def _run_model(args) -> int:
     from ..errors import CohortError
     from ..population import analyze_model, read_aha_landmarks
 
+    if args.outcome is not None:
+        if args.design is None:
+            raise UsageError("symladders analyze: error: --outcome needs --design")
+        _run_outcome(args)
+        if args.model is None and not args.contrast:
+            return 0
     if args.model is None or not args.contrast:
-        raise UsageError("symladders analyze: error: --design needs --model and --contrast")
+        raise UsageError(
+            "symladders analyze: error: --design needs --model and --contrast (or --outcome)"
+        )
     if not args.alpha < 1:
         raise UsageError(
             f"symladders analyze: error: --alpha: expected a level in (0, 1), got {args.alpha}"
@@ -213,3 +228,26 @@ def _run_model(args) -> int:
     print(f"Model tables, maps and figures in {folder}: "
           + ", ".join(Path(p).name for p in outcome.paths.values()))  # fmt: skip
     return 0
+
+
+def _run_outcome(args) -> None:
+    """Survival predicted from every motion (``--outcome TIME,EVENT``)."""
+    from ladders.statistics import read_design
+
+    from ..errors import CohortError
+    from ..population import analyze_outcome
+
+    try:
+        outcome = analyze_outcome(
+            args.study, read_design(args.design), *args.outcome, args.output,
+            baseline=args.baseline, alpha2=args.alpha2, methods=args.transport,
+            n_components=args.components, seed=args.seed,
+        )  # fmt: skip
+    except (CohortError, ValueError) as exc:
+        raise UsageError(f"symladders analyze: error: {exc}") from None
+    for m, r in outcome.results:
+        base = ("" if r.baseline_c_index is None else
+                f"; {', '.join(args.baseline)} alone {r.baseline_c_index:.2f}")  # fmt: skip
+        print(f"{m.label}: C-index {r.c_index:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]{base}")
+    print(f"Outcome tables in {Path(outcome.paths['outcome.csv']).parent}: outcome.csv, "
+          "outcome_summary.md")  # fmt: skip

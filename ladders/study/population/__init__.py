@@ -19,7 +19,9 @@
 - :mod:`.model_comparison`: a linear model's contrast tested per vertex (covariates,
   several groups, TFCE) and per AHA segment (:func:`compare_model`);
   :mod:`.model_analysis`: the analysis of a study folder with a design table
-  (:func:`analyze_model`), as ``symladders analyze --design`` runs it.
+  (:func:`analyze_model`), as ``symladders analyze --design`` runs it;
+  :mod:`.outcome_analysis`: survival predicted from every motion (:func:`analyze_outcome`,
+  ``--outcome``).
 
 The statistics themselves are generic and live in :mod:`ladders.statistics`.
 """
@@ -54,6 +56,7 @@ from .covariate_cohort import (
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
 from .model_analysis import ModelOutcome, analyze_model, check_design_table
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
+from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays
 from .segment_table import SegmentTable, segment_means, segment_table
 from .transported_motion import (
     NO_TRANSPORT,
@@ -75,6 +78,9 @@ from .two_groups import (
 )
 
 __all__ = [
+    "OutcomeOutcome",
+    "analyze_outcome",
+    "outcome_arrays",
     "ModelOutcome",
     "analyze_model",
     "check_design_table",
