@@ -133,7 +133,7 @@ def symmetry_errors(
         ``-Log_M(S')`` (:meth:`manifolds.Connection.symmetry_near`) instead of the
         space's cold start. Exact where ``log`` is (closed forms: no effect); for an
         iterative ``log`` it saves iterations, and the result is the minimiser the
-        solver reaches from that start (``docs/study.md`` measures when the cold
+        solver reaches from that start (``docs/developer_notes.md`` measures when the cold
         and warm errors agree).
 
     Returns

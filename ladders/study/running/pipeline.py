@@ -71,7 +71,7 @@ UNITS = {
 }
 
 
-#: Registration settings of the default study (``docs/study.md``, "Settings chosen by
+#: Registration settings of the default study (``docs/developer_notes.md``, "Settings chosen by
 #: measurement"): a kernel of width ``sigma = 10`` mm on control points at the shapes'
 #: vertices, a farthest-point sample of the atlas at a spacing of ``0.7 sigma`` (143
 #: points on the built-in atlas) used on every shape (:func:`make_space`), 10 Euler
