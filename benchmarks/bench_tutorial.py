@@ -70,25 +70,22 @@ def _expand(arg: str, cwd: Path) -> list[str]:
 
 
 def run_command(command: list[str], cwd: Path, extra: list[str] = ()) -> tuple[int, str, str]:
-    """``symladders ...`` in-process from ``cwd`` (globs expanded there), ``extra`` appended;
-    exit status, standard output, standard error."""
-    import contextlib
-    import io
+    """``symladders ...`` run from ``cwd`` as a shell would (a new process, globs expanded
+    there), ``extra`` appended; exit status, standard output, standard error.
 
-    from ladders.study.cli import main
+    A new process, not ``main()`` in this one: parallel workers started earlier in this
+    process keep the working directory they were started in, so relative paths (as a
+    user types them) would resolve elsewhere."""
+    import subprocess
 
     if command[0] != "symladders":
         raise ValueError(f"not a symladders command: {shlex.join(command)}")
     argv = [a for arg in command[1:] for a in _expand(arg, cwd)] + [str(a) for a in extra]
-    out, err = io.StringIO(), io.StringIO()
-    before = Path.cwd()
-    os.chdir(cwd)
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            status = main(argv)
-    finally:
-        os.chdir(before)
-    return status, out.getvalue(), err.getvalue()
+    done = subprocess.run(
+        [sys.executable, "-m", "ladders.study.cli", *argv], cwd=cwd, capture_output=True,
+        text=True, check=False,
+    )  # fmt: skip
+    return done.returncode, done.stdout, done.stderr
 
 
 def write_image_cohort(
