@@ -317,3 +317,34 @@ def test_bad_arguments_of_the_test(cohort):
         glm_test(y[:30], design, "age", 10, rng=rng)
     with pytest.raises(ValueError, match="needs a Design"):
         glm_test(y, design.matrix, "age", 10, rng=rng)
+
+
+def test_tfce_shortcut_and_effect_are_those_of_the_explicit_route():
+    """``glm_test(tfce=adjacency)`` equals the explicit ``enhance`` built from the observed
+    map, and the returned effect is the fit's ``C B``; both routes at once are refused."""
+    import trimesh
+
+    from ladders.statistics import fit_statistic, mesh_adjacency, tfce_from_observed
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    k = len(mesh.vertices)
+    adjacency = mesh_adjacency(mesh.faces, k)
+    rng = np.random.default_rng(3)
+    n = 24
+    table = {"subject": [f"s{i}" for i in range(n)], "group": ["a", "b"] * (n // 2)}
+    design = design_matrix(table, "group")
+    y = rng.standard_normal((n, k)) + 0.8 * (np.arange(n) % 2)[:, None] * (
+        mesh.vertices[:, 2] > 0.5
+    )
+    short = glm_test(
+        y, design, "group[b] - group[a]", 200, np.random.default_rng(1), tfce=adjacency
+    )
+    fit = fit_statistic(y, design.matrix, contrast_matrix(design, "group[b] - group[a]")[1])
+    explicit = glm_test(y, design, "group[b] - group[a]", 200, np.random.default_rng(1),
+                        enhance=tfce_from_observed(fit.statistic, fit.kind, adjacency))  # fmt: skip
+    np.testing.assert_array_equal(short.p_fwer_enhanced, explicit.p_fwer_enhanced)
+    np.testing.assert_allclose(short.enhanced, explicit.enhanced, rtol=1e-12)
+    np.testing.assert_allclose(short.effect, fit.effect, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="tfce"):
+        glm_test(y, design, "group", 10, np.random.default_rng(0), tfce=adjacency,
+                 enhance=lambda m: m)  # fmt: skip

@@ -17,7 +17,7 @@ SPD matrices as on LDDMM momenta; the group tests and the linear model take arra
   or Pillai's trace), :func:`contrast_bases`, :func:`pillai_f`, :func:`pillai_to_hotelling`;
 - :mod:`.permutation_glm`: :func:`glm_test` (Freedman-Lane, Manly or Draper-Stoneman
   permutations, within blocks, family-wise error of the maximum, optional enhancement),
-  :func:`permutation_indices`, :func:`two_sided`;
+  :func:`permutation_indices`, :func:`two_sided`, :func:`tfce_from_observed`;
 - :mod:`.survival`: :func:`cross_validated_c_index` and
   :func:`cross_validated_c_index_from_motion` (Cox regression, lifelines; cross-validated
   C-index with a bootstrap interval), :func:`c_index`, :func:`simulate_survival`;
@@ -34,7 +34,14 @@ from .design import Design, contrast_matrix, design_matrix, read_design
 from .detection import binomial_interval, detection_power, dice
 from .group_tests import GlobalTest, VertexwiseTest, check_groups, global_test, vertexwise_test
 from .linear_model import LinearFit, contrast_bases, fit_statistic, pillai_f, pillai_to_hotelling
-from .permutation_glm import METHODS, GLMTest, glm_test, permutation_indices, two_sided
+from .permutation_glm import (
+    METHODS,
+    GLMTest,
+    glm_test,
+    permutation_indices,
+    tfce_from_observed,
+    two_sided,
+)
 from .survival import (
     SurvivalResult,
     c_index,
@@ -76,6 +83,7 @@ __all__ = [
     "glm_test",
     "permutation_indices",
     "two_sided",
+    "tfce_from_observed",
     "SurvivalResult",
     "c_index",
     "cross_validated_c_index",

@@ -48,8 +48,16 @@ from .linear_model import (
     scatter_entries,
     statistic_of,
 )
+from .tfce import tfce_enhancer, tfce_step
 
-__all__ = ["GLMTest", "glm_test", "permutation_indices", "two_sided", "METHODS"]
+__all__ = [
+    "GLMTest",
+    "glm_test",
+    "permutation_indices",
+    "two_sided",
+    "tfce_from_observed",
+    "METHODS",
+]
 
 #: The permutation strategies of :func:`glm_test`.
 METHODS = ("freedman_lane", "manly", "draper_stoneman")
@@ -85,6 +93,8 @@ class GLMTest:
     p_fwer_enhanced : ndarray, shape (k,), or None
         Family-wise corrected p-value of the enhanced maps' maximum.
     max_null_enhanced : ndarray, shape (P,), or None
+    effect : ndarray, shape (q, k) or (q, k, d), or None
+        The contrast's estimate ``C B`` at every vertex (the observed fit's).
     """
 
     statistic: np.ndarray
@@ -99,6 +109,7 @@ class GLMTest:
     enhanced: np.ndarray | None = None
     p_fwer_enhanced: np.ndarray | None = None
     max_null_enhanced: np.ndarray | None = None
+    effect: np.ndarray | None = None
 
     def significant(self, alpha: float = 0.05, enhanced: bool = False) -> np.ndarray:
         """Vertices whose family-wise corrected p-value (of the enhanced maps) is below ``alpha``."""
@@ -149,6 +160,23 @@ def two_sided(enhance: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarr
         )
 
     return enhance_both
+
+
+def tfce_from_observed(
+    observed, kind: str, adjacency, height: float = 2.0, extent: float = 1.0
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The ``enhance`` of threshold-free cluster enhancement for one test's maps.
+
+    The threshold step is fixed once from the observed map (:func:`~.tfce.tfce_step`),
+    the same for every permuted map; a ``t`` map is enhanced in both tails
+    (:func:`two_sided`). A map with nothing above zero enhances to zeros.
+    """
+    signed = kind == "t"
+    step = tfce_step(observed, two_sided=signed)
+    if step <= 0:
+        return np.zeros_like
+    base = tfce_enhancer(adjacency, height, extent, step=step)
+    return two_sided(base) if signed else base
 
 
 def _fwer(observed: np.ndarray, max_null: np.ndarray) -> np.ndarray:
@@ -238,6 +266,7 @@ def glm_test(
     method: str = "freedman_lane",
     blocks=None,
     enhance: Callable[[np.ndarray], np.ndarray] | None = None,
+    tfce=None,
     chunk_size: int | None = None,
     progress: bool = False,
     ridge: float = 1e-9,
@@ -265,6 +294,10 @@ def glm_test(
         (``m = 1``) then with chunks of permutations. It receives the signed ``t``
         (use :func:`two_sided` to enhance both tails), ``F`` or Pillai's trace; the
         maximum is taken of ``|enhanced|`` for ``t``, of the enhanced map otherwise.
+    tfce : scipy.sparse matrix, shape (k, k), optional
+        A mesh's vertex adjacency (:func:`~.tfce.mesh_adjacency`): threshold-free cluster
+        enhancement (``H = 2``, ``E = 1``, step from the observed map) as ``enhance``
+        (:func:`tfce_from_observed`); not with ``enhance``.
     chunk_size : int, optional
         Permutations per matrix product (default: a 64 MB budget).
     progress : bool
@@ -287,6 +320,10 @@ def glm_test(
     x, c = check_model(x, c, y.shape[0], y.shape[2])
     fit = fit_statistic(y[..., 0] if scalar else y, x, c, ridge)
     null = _Null(y, x, c, method, scalar, float(ridge))
+    if tfce is not None:
+        if enhance is not None:
+            raise ValueError("tfce: give tfce or enhance, not both")
+        enhance = tfce_from_observed(fit.statistic, fit.kind, tfce)
     magnitude = np.abs if fit.kind == "t" else np.asarray
     observed_enhanced = None if enhance is None else _enhanced(enhance, fit.statistic[None])[0]
     if chunk_size is None:
@@ -304,5 +341,5 @@ def glm_test(
     p_enhanced = None if enhance is None else _fwer(magnitude(observed_enhanced), max_enhanced)
     return GLMTest(
         fit.statistic, fit.p_value, p_fwer, max_null, fit.kind, fit.df, name,
-        n_permutations, method, observed_enhanced, p_enhanced, max_enhanced,
+        n_permutations, method, observed_enhanced, p_enhanced, max_enhanced, fit.effect,
     )  # fmt: skip

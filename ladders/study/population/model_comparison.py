@@ -31,16 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ladders.statistics import (
-    Design,
-    contrast_matrix,
-    fit_statistic,
-    glm_test,
-    mesh_adjacency,
-    tfce_enhancer,
-    tfce_step,
-    two_sided,
-)
+from ladders.statistics import Design, contrast_matrix, glm_test, mesh_adjacency
 from manifolds.validation import check_int, check_rng
 
 from ..errors import CohortError
@@ -53,7 +44,8 @@ __all__ = ["MODEL_TESTS", "TFCE_HEIGHT", "TFCE_EXTENT", "ModelComparison", "comp
 
 #: The per-vertex tests of a :class:`ModelComparison`.
 MODEL_TESTS = ("displacement", "normal", "strain", "wall_motion")
-#: TFCE's height and extent exponents on a surface (FSL PALM's ``-tfce2D``).
+#: TFCE's height and extent exponents on a surface (FSL PALM's ``-tfce2D``; those of
+#: :func:`ladders.statistics.tfce_from_observed`).
 TFCE_HEIGHT, TFCE_EXTENT = 2.0, 1.0
 
 
@@ -111,21 +103,9 @@ def model_responses(motion: TransportedMotion) -> dict:
     }
 
 
-def _effects(y: np.ndarray, x: np.ndarray, c: np.ndarray) -> np.ndarray | None:
-    """``C beta`` per vertex (and component) for a one-row contrast, else None."""
-    if c.shape[0] != 1:
-        return None
-    beta = np.linalg.lstsq(x, y.reshape(len(y), -1), rcond=None)[0]
-    return (c @ beta).reshape(y.shape[1:])
-
-
-def _enhancer(statistic: np.ndarray, kind: str, adjacency):
-    signed = kind == "t"
-    step = tfce_step(statistic, two_sided=signed)
-    if step <= 0:  # nothing above zero: enhance nothing
-        return lambda maps: np.zeros_like(maps)
-    base = tfce_enhancer(adjacency, TFCE_HEIGHT, TFCE_EXTENT, step=step)
-    return two_sided(base) if signed else base
+def _effect(test) -> np.ndarray | None:
+    """The contrast's estimate per vertex (and component) for a one-row contrast, else None."""
+    return test.effect[0] if test.effect.shape[0] == 1 else None
 
 
 def compare_model(
@@ -174,27 +154,18 @@ def compare_model(
     name, c = contrast_matrix(design, contrast)
     responses = model_responses(motion)
     adjacency = mesh_adjacency(motion.faces, motion.atlas.shape[0]) if tfce else None
-    tests, effects = {}, {}
-    for test in MODEL_TESTS:
-        y = responses[test]
-        enhance = None
-        if tfce:
-            observed = fit_statistic(y, design.matrix, c, ridge=1e-9 if y.ndim == 3 else 0.0)
-            enhance = _enhancer(observed.statistic, observed.kind, adjacency)
-        tests[test] = glm_test(y, design, c, n_permutations, rng, method, blocks, enhance,
-                               progress=progress)  # fmt: skip
-        effect = _effects(y, design.matrix, c)
-        if effect is not None:
-            effects[test] = effect
+    tests = {test: glm_test(responses[test], design, c, n_permutations, rng, method, blocks,
+                            tfce=adjacency, progress=progress)
+             for test in MODEL_TESTS}  # fmt: skip
+    effects = {t: e for t, r in tests.items() if (e := _effect(r)) is not None}
     segment_tests = segment_effects = None
     if segments is not None:
         segments = np.asarray(segments)
-        segment_tests, segment_effects = {}, {}
-        for test in MODEL_TESTS:
-            y = segment_means(responses[test], segments)
-            segment_tests[test] = glm_test(y, design, c, n_permutations, rng, method, blocks)
-            effect = _effects(y, design.matrix, c)
-            if effect is not None:
-                segment_effects[test] = effect
+        segment_tests = {
+            test: glm_test(segment_means(responses[test], segments), design, c, n_permutations,
+                           rng, method, blocks)
+            for test in MODEL_TESTS
+        }  # fmt: skip
+        segment_effects = {t: e for t, r in segment_tests.items() if (e := _effect(r)) is not None}
     return ModelComparison(motion, design, name, tests, effects, segments, segment_tests,
                            segment_effects)  # fmt: skip
