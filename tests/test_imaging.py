@@ -111,16 +111,44 @@ def test_the_cut_removes_the_lid_a_label_makes_at_its_base():
     # slice centres at z = -6 (inside) and +2 (outside): the lid falls near z = -2
     affine = short_axis_affine([-16.5, -16.5, -22.0], 1.5, 8.0)
     settings = MeshingSettings(n_vertices=None, cut_plane=base)
-    at_plane = _mesh_of(closed_v, closed_f, affine, (23, 23, 4), replace(settings, cut_margin=0))
-    below = _mesh_of(closed_v, closed_f, affine, (23, 23, 4), settings)
-    assert at_plane[2].closed and at_plane[2].faces_cut == 0
-    assert "does not cross" in at_plane[2].describe()
-    v, f, report = below
-    assert not report.closed and report.boundary_loops == 1 and report.faces_cut > 0
-    assert v[:, 2].max() <= -4.0 + 1.0  # half a slice below the base, to within a face
-    lid = surface_distances(at_plane[0], at_plane[1], open_v, open_f)
+
+    def mesh(**changes):
+        return _mesh_of(closed_v, closed_f, affine, (23, 23, 4), replace(settings, **changes))
+
+    kept = mesh(cut_margin=0.0)  # the plane alone does not cross the surface
+    assert kept[2].closed and kept[2].faces_cut == 0
+    assert "does not cross" in kept[2].describe()
+    former = mesh()  # the default: half a slice below the base
+    v, f, report = mesh(cut_margin=0.0, lid_angle=45.0)  # the lid removed by its normals
+    for mesh_ in (former, (v, f, report)):
+        assert not mesh_[2].closed and mesh_[2].boundary_loops == 1 and mesh_[2].faces_cut > 0
+    assert former[0][:, 2].max() <= -4.0 + 1.0
+    # the lid removal keeps the wall up to the lid's rounded edge (the lid near z = -2)
+    assert v[:, 2].max() > former[0][:, 2].max() + 1.0
+    assert v[:, 2].max() < 0.0
+    lid = surface_distances(kept[0], kept[1], open_v, open_f)
     cut = surface_distances(v, f, open_v, open_f)
+    below = surface_distances(*former[:2], open_v, open_f)
     assert cut["mean_surface_distance"] < 0.8 * lid["mean_surface_distance"]
+    # less of the true wall missing than with the margin (true surface to the mesh)
+    assert cut["mean_b_to_a"] < below["mean_b_to_a"]
+
+
+def test_lid_removal_keeps_a_wall_that_crosses_the_plane():
+    """An open cylinder wall crossing the plane: nothing faces the plane, nothing goes but the cut."""
+    from ladders.study.imaging import remove_lid
+
+    angle = np.linspace(0.0, 2.0 * np.pi, 40, endpoint=False)
+    z = np.linspace(-10.0, 0.0, 11)
+    v = np.array([[10 * np.cos(a), 10 * np.sin(a), h] for h in z for a in angle])
+    f = []
+    for i in range(len(z) - 1):
+        for j in range(40):
+            a, b = i * 40 + j, i * 40 + (j + 1) % 40
+            f += [[a, b, b + 40], [a, b + 40, a + 40]]
+    f = np.array(f)
+    out_v, out_f = remove_lid(v, f, (0, 0, 0, 0, 0, 1), depth=5.0, angle=45.0)
+    assert len(out_f) == len(f) and len(out_v) == len(v)
 
 
 def test_the_cut_margin_is_measured_along_the_normal_in_voxel_widths():
@@ -134,6 +162,10 @@ def test_the_cut_margin_is_measured_along_the_normal_in_voxel_widths():
     np.testing.assert_allclose(_shifted_plane(settings, tilted)[2], 3.0 - 0.5 * width)
     with pytest.raises(ValueError, match="cut_margin"):
         MeshingSettings(cut_margin=-1.0)
+    with pytest.raises(ValueError, match="lid_angle"):
+        MeshingSettings(lid_angle=90.0)
+    with pytest.raises(ValueError, match="lid_depth"):
+        MeshingSettings(lid_depth=float("nan"))
 
 
 def test_bad_images_are_refused_naming_the_file(tmp_path):
@@ -194,3 +226,11 @@ def test_a_batch_goes_on_past_a_failure_records_it_and_resumes(tmp_path):
                  str(tmp_path / "cli"), "--no-progress", "--jobs", "1"])  # fmt: skip
     assert code == 1 and (tmp_path / "cli" / "c4_es.vtk").is_file()
     assert main(["mesh", str(images / "missing.nii.gz"), "--label", "1"]) == 2
+    # the lid removal on the command line, recorded with the mesh; a bad angle refused
+    lid = ["mesh", str(images / "c1_ed.nii.gz"), "--label", "1", "--cut-plane", "0,0,10,0,0,1",
+           "--cut-margin", "0", "--lid-angle", "45", "-o", str(tmp_path / "lid"),
+           "--no-progress", "--jobs", "1"]  # fmt: skip
+    assert main(lid) == 0
+    settings = json.loads((tmp_path / "lid" / "c1_ed.json").read_text())["settings"]
+    assert settings["lid_angle"] == 45.0 and settings["cut_margin"] == 0.0
+    assert main([*lid[:-6], "--lid-angle", "95", *lid[-4:]]) == 2

@@ -50,6 +50,20 @@ def _nonnegative_float(text: str) -> float:
     return value
 
 
+def _lid_angle(text: str) -> float | None:
+    if text.strip().lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected degrees in [0, 90) or 'none', got {text!r}"
+        ) from None
+    if not 0 <= value < 90:
+        raise argparse.ArgumentTypeError(f"expected degrees in [0, 90) or 'none', got {text!r}")
+    return value
+
+
 def _read_planes(path: Path) -> dict:
     """``{image: (x, y, z, nx, ny, nz)}`` from a CSV table, or a usage error naming the line."""
     import csv
@@ -113,6 +127,10 @@ def add_mesh_parser(sub) -> None:
     p.add_argument("--cut-margin", type=_nonnegative_float, default=0.5,
                    help="move the cut plane this many voxel widths against its normal, so that "
                         "the lid a label makes at the valve plane goes (0: cut at the plane)")  # fmt: skip
+    p.add_argument("--lid-angle", type=_lid_angle, default=None, metavar="DEG",
+                   help="also remove the faces within one voxel width below the plane whose "
+                        "normal is within DEG degrees of the plane's normal (the lid), e.g. "
+                        "--cut-margin 0 --lid-angle 45 (default: none)")  # fmt: skip
     p.add_argument("--rv-label", type=nonnegative_int, default=None, metavar="INT",
                    help="the right ventricle's label: find each mesh's apex, base-plane centre "
                         "and septal point and write landmarks.csv (default: no landmarks)")  # fmt: skip
@@ -139,7 +157,7 @@ def run_mesh_command(args) -> int:
         settings = MeshingSettings(
             mask_sigma=args.mask_sigma, taubin_iterations=args.taubin_iterations,
             n_vertices=args.vertices or None, cut_plane=args.cut_plane,
-            cut_margin=args.cut_margin,
+            cut_margin=args.cut_margin, lid_angle=args.lid_angle,
         )  # fmt: skip
         outcome = mesh_label_images(
             args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,

@@ -18,7 +18,13 @@ from .label_images import IMAGE_SUFFIXES, ImageError, LabelImage, image_stem, re
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
 from .rv_label import add_rv_label, voxel_centres
 from .septum import label_centroid, landmarks_from_labels, lv_apex_and_base
-from .surface_extraction import MeshingSettings, SurfaceReport, cut_at_plane, extract_surface
+from .surface_extraction import (
+    MeshingSettings,
+    SurfaceReport,
+    cut_at_plane,
+    extract_surface,
+    remove_lid,
+)
 from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
 
 __all__ = [
@@ -35,6 +41,7 @@ __all__ = [
     "MeshingSettings",
     "SurfaceReport",
     "cut_at_plane",
+    "remove_lid",
     "extract_surface",
     "close_surface",
     "short_axis_affine",

@@ -7,11 +7,11 @@ the true boundary between voxel centres instead of on a staircase), runs
 scikit-image's marching cubes on it in index space, maps the vertices to world
 millimetres with the image's full affine (orientation, spacing, flips; the faces
 are reversed when the affine flips handedness so that the normals point outward),
-smooths the surface with Taubin's volume-preserving filter (trimesh), optionally
-cuts it at a plane (e.g. the valve plane of a ventricle), and decimates it to a
-target vertex count (fast-simplification). The :class:`SurfaceReport` says what
-was dropped, whether the surface is closed, its holes and non-manifold edges, and
-the shrinkage by smoothing.
+smooths the surface with Taubin's volume-preserving filter (trimesh), decimates it to
+a target vertex count (fast-simplification), and optionally cuts it at a plane (e.g.
+the valve plane of a ventricle), where it removes the lid that closed the label. The
+:class:`SurfaceReport` says what was dropped, whether the surface is closed, its
+holes and non-manifold edges, and the shrinkage by smoothing.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from skimage.measure import marching_cubes
 from ..volume import enclosed_volume
 from .label_images import ImageError, LabelImage
 
-__all__ = ["MeshingSettings", "SurfaceReport", "extract_surface", "cut_at_plane"]
+__all__ = ["MeshingSettings", "SurfaceReport", "extract_surface", "cut_at_plane", "remove_lid"]
 
 
 @dataclass(frozen=True)
@@ -55,9 +55,21 @@ class MeshingSettings:
         affine: 8 mm across 8 mm slices, 1 mm for 1 mm voxels). A label that stops at
         the valve plane gives a surface closed by a lid within half a voxel of that
         plane, above or below it; the default 0.5 removes the lid whichever side it
-        falls (with a plane exactly at the base of an 8 mm short-axis stack the lid
-        stays on about half of the meshes: mean surface distance 0.7-1.3 mm instead of
-        0.3-0.4 mm, ``benchmarks/bench_images.py``). 0: cut at the plane as given.
+        falls, and with it that strip of wall at the base (with a plane exactly at the
+        base of an 8 mm short-axis stack the lid stays on about half of the meshes:
+        mean surface distance 0.7-1.3 mm instead of 0.3-0.4 mm,
+        ``benchmarks/bench_images.py``). 0: cut at the plane as given.
+    lid_angle : float or None
+        The other way to remove the lid (default None: not used): cut at the
+        (moved) plane, then remove the faces within ``lid_depth`` voxel extents below
+        it whose normal is within ``lid_angle`` degrees of the plane's normal, with the
+        small pieces this leaves apart from the wall (e.g. ``cut_margin=0,
+        lid_angle=45``). It keeps the wall up to the lid's rounded edge: at 1.5 mm
+        voxels the rim sits about half as far below the true base, but the
+        corresponded vertices are not closer to their true material points
+        (``benchmarks/bench_image_route.py``).
+    lid_depth : float
+        How far below the plane the lid is looked for, in voxel extents (default 1).
     keep_largest : bool
         Keep the largest connected component of the label only.
     """
@@ -69,6 +81,8 @@ class MeshingSettings:
     n_vertices: int | None = 2000
     cut_plane: tuple | None = None
     cut_margin: float = 0.5
+    lid_angle: float | None = None
+    lid_depth: float = 1.0
     keep_largest: bool = True
 
     def __post_init__(self):
@@ -90,6 +104,15 @@ class MeshingSettings:
         if not np.isfinite(self.cut_margin) or self.cut_margin < 0:
             raise ValueError(
                 f"cut_margin: expected a number of voxel extents >= 0, got {self.cut_margin}"
+            )
+
+        if self.lid_angle is not None and not 0.0 <= self.lid_angle < 90.0:
+            raise ValueError(
+                f"lid_angle: expected degrees in [0, 90) (or None), got {self.lid_angle}"
+            )
+        if not np.isfinite(self.lid_depth) or self.lid_depth < 0:
+            raise ValueError(
+                f"lid_depth: expected a number of voxel extents >= 0, got {self.lid_depth}"
             )
 
     def as_dict(self) -> dict:
@@ -167,6 +190,43 @@ def cut_at_plane(vertices, faces, plane) -> tuple[np.ndarray, np.ndarray]:
     mesh = trimesh.Trimesh(vertices, faces[keep], process=False)
     mesh.remove_unreferenced_vertices()
     return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+def remove_lid(vertices, faces, plane, depth: float, angle: float):
+    """Remove the lid closing a surface at ``plane``.
+
+    The faces whose centroid lies less than ``depth`` (mm) below the plane and whose
+    normal is within ``angle`` degrees of the plane's normal are removed; of what is
+    left, the largest connected piece is kept (the removal can leave bits of the lid's
+    rim apart from the wall).
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (k, 3)
+    faces : ndarray of int, shape (f, 3)
+        Outward normals.
+    plane : sequence of 6 floats
+        ``(x, y, z, nx, ny, nz)``; the normal points out of the surface through the lid.
+    depth : float
+        mm below the plane.
+    angle : float
+        Degrees.
+
+    Returns
+    -------
+    vertices, faces : the surface without its lid, unused vertices dropped.
+    """
+    point, normal = np.asarray(plane[:3], float), np.asarray(plane[3:], float)
+    normal = normal / np.linalg.norm(normal)
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    height = (mesh.triangles_center - point) @ normal
+    facing = mesh.face_normals @ normal > np.cos(np.radians(angle))
+    kept = trimesh.Trimesh(vertices, faces[~((height > -depth) & facing)], process=False)
+    pieces = kept.split(only_watertight=False)
+    if len(pieces) == 0:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    largest = max(pieces, key=lambda piece: len(piece.faces))
+    return np.asarray(largest.vertices, float), np.asarray(largest.faces, np.int64)
 
 
 def _boundary_loops(faces: np.ndarray) -> int:
@@ -250,7 +310,11 @@ def extract_surface(
         world, faces = np.asarray(world, float), np.asarray(faces, np.int64)
     n_before_cut = len(faces)
     if settings.cut_plane is not None:
-        world, faces = cut_at_plane(world, faces, _shifted_plane(settings, image.affine))
+        plane = _shifted_plane(settings, image.affine)
+        world, faces = cut_at_plane(world, faces, plane)
+        if settings.lid_angle is not None and len(faces):
+            depth = settings.lid_depth * _extent(plane[3:], image.affine)
+            world, faces = remove_lid(world, faces, plane, depth, settings.lid_angle)
     boundary, non_manifold = _edge_counts(faces)
     report = SurfaceReport(
         label, voxels, int(n_components), dropped_components, dropped_voxels, boundary == 0,
@@ -266,6 +330,11 @@ def _shifted_plane(settings: MeshingSettings, affine: np.ndarray) -> tuple:
     point = np.asarray(settings.cut_plane[:3], float)
     normal = np.asarray(settings.cut_plane[3:], float)
     normal = normal / np.linalg.norm(normal)
-    extent = float(np.abs(normal @ np.asarray(affine, float)[:3, :3]).sum())
-    point = point - settings.cut_margin * extent * normal
+    point = point - settings.cut_margin * _extent(normal, affine) * normal
     return (*point, *normal)
+
+
+def _extent(normal, affine: np.ndarray) -> float:
+    """A voxel's width along the unit vector ``normal`` (mm)."""
+    normal = np.asarray(normal, float) / np.linalg.norm(normal)
+    return float(np.abs(normal @ np.asarray(affine, float)[:3, :3]).sum())

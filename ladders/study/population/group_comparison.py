@@ -137,7 +137,7 @@ class GroupComparison:
         return getattr(self, test).p_fwer < alpha
 
 
-def _volume_scale(space, atlas, faces, displacement, target) -> float:
+def _volume_scale(space, atlas, faces, displacement, target, subject: str = "") -> float:
     base = enclosed_volume(atlas, faces)
 
     def ratio(shape):
@@ -147,7 +147,8 @@ def _volume_scale(space, atlas, faces, displacement, target) -> float:
         _, scale = normalize_amplitude(space, atlas, displacement, ratio, target)
     except ValueError as exc:
         raise CohortError(
-            f"normalize='volume': no scale reaches the subject's ratio ({exc})"
+            f"normalize='volume': no scale of subject {subject}'s transported motion reaches "
+            f"its volume ratio {target:.4g} ({exc})"
         ) from None
     return scale
 
@@ -186,8 +187,8 @@ def normalize_motion(
     space = Euclidean(motion.atlas.shape)
     scales = np.array(
         [
-            _volume_scale(space, motion.atlas, motion.faces, d, r)
-            for d, r in zip(motion.displacement, ratios)
+            _volume_scale(space, motion.atlas, motion.faces, d, r, s)
+            for d, r, s in zip(motion.displacement, ratios, motion.subjects)
         ]
     )
     scaled = motion.displacement * scales[:, None, None]

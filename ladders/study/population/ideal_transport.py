@@ -1,0 +1,118 @@
+"""The ideal transport of a synthetic subject's motion: its own motion on the atlas's anatomy.
+
+A transport carries a subject's end-diastole to end-systole motion onto the atlas. In
+the synthetic cohort the answer is known: the motion parameters of the subject (radial
+contraction and its heterogeneity and gradient, longitudinal shortening, apex and base
+rotations, and the planted abnormality of its group), applied to the atlas's anatomy
+(the model's mid-range anatomy without wall harmonics, which is how
+:func:`~ladders.study.cohort.synthetic_lv.make_synthetic_cohort` builds the atlas).
+:func:`ideal_transport` gives that displacement per subject and atlas vertex, and
+:func:`transport_error` the distance of a transported motion to it: the measure of
+how much of a subject's anatomy a transport leaves in its motion.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..cohort.planted_effect import planted_modulation
+from ..cohort.synthetic_lv import (
+    SubjectParameters,
+    SyntheticLVModel,
+    grid_shape,
+    lv_grid,
+    lv_shapes,
+)
+from ..errors import CohortError
+from .covariate_cohort import CovariateCohort
+
+__all__ = ["MOTION_PARAMETERS", "ideal_transport", "transport_error"]
+
+#: The parameters of :class:`~ladders.study.cohort.synthetic_lv.SubjectParameters` that
+#: describe the motion (the others describe the end-diastolic anatomy).
+MOTION_PARAMETERS = (
+    "longitudinal_shortening",
+    "radial_contraction",
+    "contraction_heterogeneity",
+    "heterogeneity_phase",
+    "contraction_gradient",
+    "apex_rotation",
+    "base_rotation",
+)
+
+
+def ideal_transport(data: CovariateCohort, model: SyntheticLVModel | None = None) -> np.ndarray:
+    """Each subject's motion parameters applied to the atlas's anatomy, as a displacement.
+
+    Parameters
+    ----------
+    data : CovariateCohort
+        A cohort of :func:`~ladders.study.population.make_covariate_cohort` (its subjects
+        keep the parameters they were drawn with, after the covariates and the anatomy
+        shifts acted on them).
+    model : SyntheticLVModel, optional
+        The model the cohort was drawn with (default ``SyntheticLVModel()``).
+
+    Returns
+    -------
+    ndarray, shape (n, k, 3)
+        ``ES_i - T`` on the atlas ``T``, subject ``i`` in cohort order (mm).
+
+    Raises
+    ------
+    CohortError
+        The cohort's atlas is not the model's mid-range anatomy on the cohort's grid
+        (another model, or a cohort not drawn by the generator), or a subject has no
+        parameters.
+    """
+    if not isinstance(data, CovariateCohort):
+        raise CohortError(f"data: expected a CovariateCohort, got {type(data).__name__}")
+    model = model or SyntheticLVModel()
+    cohort = data.cohort
+    theta, phi, _ = lv_grid(*grid_shape(cohort.atlas.shape[0]), model)
+    mean = SubjectParameters.mean(model)
+    atlas, _ = lv_shapes(mean, theta, phi)
+    if atlas.shape != cohort.atlas.shape or not np.allclose(atlas, cohort.atlas, atol=1e-9):
+        raise CohortError(
+            "data: its atlas is not the mid-range anatomy of this model on its grid "
+            "(pass the SyntheticLVModel the cohort was drawn with)"
+        )
+    modulations = {
+        spec.name: None
+        if spec.abnormality is None
+        else planted_modulation(spec.abnormality, theta, phi)
+        for spec in data.specs
+    }
+    out = np.empty((len(cohort.subjects),) + atlas.shape)
+    for i, s in enumerate(cohort.subjects):
+        if s.parameters is None:
+            raise CohortError(f"data: subject {s.name} has no generator parameters")
+        motion = {name: getattr(s.parameters, name) for name in MOTION_PARAMETERS}
+        _, es = lv_shapes(replace(mean, **motion), theta, phi, modulations[data.groups[s.name]])
+        out[i] = es - atlas
+    return out
+
+
+def transport_error(displacement, ideal) -> np.ndarray:
+    """Mean distance over the atlas's vertices of each transported displacement to its ideal.
+
+    Parameters
+    ----------
+    displacement, ideal : array, shape (n, k, 3)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        ``mean_j |d_ij - ideal_ij|`` per subject (mm).
+    """
+    d = np.asarray(displacement, dtype=float)
+    ideal = np.asarray(ideal, dtype=float)
+    if d.shape != ideal.shape or d.ndim != 3:
+        raise CohortError(
+            f"displacement: expected the shape of ideal {ideal.shape} (n, k, 3), got {d.shape}"
+        )
+    if not (np.isfinite(d).all() and np.isfinite(ideal).all()):
+        raise CohortError("displacement: contains NaN or infinite values")
+    return np.linalg.norm(d - ideal, axis=2).mean(axis=1)
