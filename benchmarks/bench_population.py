@@ -24,7 +24,7 @@ give), ``segmentations_unposed`` (in the atlas's frame, no landmarks) and
 ``segmentations_nolandmarks`` (posed, no landmarks: the twist of each pose about the
 long axis is then left). The studies are listed in :data:`PLAN` (LDDMM at ``alpha^2``
 in 0.01, 1, 100 on the meshes in correspondence, SVF and the twist at 1, the
-segmentation arms at 1); the segmentation arms are scored on their 40 subjects and on
+segmentation arms at 1, the mild hypokinesia through the posed segmentations too); the segmentation arms are scored on their 40 subjects and on
 the first 20 (``<cohort>_20``); the analysis
 scores every transport and the motion without transport against the planted
 region (:func:`ladders.study.population.score_transports`) with 10,000 permutations,
@@ -86,6 +86,7 @@ PLAN = (
     ("corresponded", "twist", "lddmm", (1.0,), 40),
     ("segmentations", "hypokinesia", "lddmm", (1.0,), 40),
     ("segmentations", "null", "lddmm", (1.0,), 40),
+    ("segmentations", "hypokinesia_mild", "lddmm", (1.0,), 40),
     ("segmentations", "twist", "lddmm", (1.0,), 20),
     ("segmentations_unposed", "hypokinesia", "lddmm", (1.0,), 40),
     ("segmentations_unposed", "null", "lddmm", (1.0,), 40),

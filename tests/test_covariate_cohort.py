@@ -1,6 +1,7 @@
 """The cohort in several groups with covariates: design table, truth file and planted effects."""
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -154,3 +155,50 @@ def test_the_same_seed_gives_the_same_cohort():
 def test_bad_input_is_refused_naming_the_argument(call, match):
     with pytest.raises(CohortError, match=match):
         call()
+
+
+def test_the_command_line_writes_the_same_cohort_as_python(tmp_path, capsys):
+    """``symladders cohort --group ... --anatomy ... --imbalance``: make_covariate_cohort's cohort."""
+    from ladders.study.cli import main
+    from ladders.study.meshes import read_mesh
+
+    argv = ["cohort", "-o", str(tmp_path / "cli"), "--subjects", "16", "--vertices", str(K),
+            "--seed", "3", "--imbalance", "0.5", "--group", "controls",
+            "--group", "lad=hypokinesia@7,8,13,14", "--group", "rca=radial@3,4,9,10@0.6",
+            "--group", "lcx=longitudinal@5,6,11,12", "--anatomy", "lcx=scale:1.15,sphericity:1.1"]  # fmt: skip
+    assert main(argv) == 0
+    groups = (*FOUR[:3], ("lcx", FOUR[3][1], SHIFT))
+    data = make_covariate_cohort(4, groups, Covariates(imbalance=0.5), seed=3, n_vertices=K)
+    folder = tmp_path / "cli"
+    assert read_design(folder / DESIGN_FILE) == read_design(
+        write_covariate_cohort(data, tmp_path / "py") / DESIGN_FILE
+    )
+    last = data.cohort.subjects[-1]
+    np.testing.assert_allclose(read_mesh(folder / f"{last.name}_es.vtk")[0], last.es, atol=1e-5)
+    truth = json.loads((folder / "planted_region.json").read_text())
+    assert truth["groups"]["lcx"]["anatomy"]["scale"] == 1.15
+    assert "lcx: longitudinal" in capsys.readouterr().out
+    # without any group option, the two-group cohort and no design table, as before
+    assert (
+        main(["cohort", "-o", str(tmp_path / "two"), "--subjects", "6", "--vertices", str(K)]) == 0
+    )
+    assert not (tmp_path / "two" / DESIGN_FILE).exists()
+    assert main(["cohort", "-o", str(tmp_path / "d"), "--subjects", "6", "--vertices", str(K),
+                 "--design"]) == 0  # fmt: skip
+    assert read_design(tmp_path / "d" / DESIGN_FILE)["group"] == ["controls"] * 3 + ["patients"] * 3
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--anatomy", "nobody=scale:1.1"], "--anatomy nobody: no such group"),
+    (["--anatomy", "patients=scale:9"], "AnatomyShift.scale"),
+    (["--anatomy", "patients=size:1.1"], "keys scale, sphericity, bulge"),
+    (["--group", "a=twirl"], "KIND one of hypokinesia"),
+    (["--group", "a", "--group", "a"], "duplicate group name 'a'"),
+    (["--imbalance", "2"], "expected a fraction in \\[0, 1\\]"),
+])  # fmt: skip
+def test_the_command_line_refuses_bad_groups_naming_them(tmp_path, capsys, extra, message):
+    from ladders.study.cli import main
+
+    assert main(["cohort", "-o", str(tmp_path / "c"), "--subjects", "6", "--vertices", str(K),
+                 *extra]) == 2  # fmt: skip
+    assert re.search(message, capsys.readouterr().err)

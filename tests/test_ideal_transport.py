@@ -71,7 +71,7 @@ def test_bad_input_is_refused():
     data = make_covariate_cohort(3, (("controls", None), ("b", None)), seed=1, n_vertices=K)
     with pytest.raises(CohortError, match="data: its atlas"):
         ideal_transport(data, SyntheticLVModel(radius=(20.0, 20.0)))
-    with pytest.raises(CohortError, match="data: expected a CovariateCohort"):
+    with pytest.raises(CohortError, match="data: expected a CovariateCohort or a TwoGroupCohort"):
         ideal_transport(data.cohort)
     ideal = ideal_transport(data)
     with pytest.raises(CohortError, match="displacement: expected the shape"):
@@ -80,3 +80,14 @@ def test_bad_input_is_refused():
     bad[0, 0, 0] = np.nan
     with pytest.raises(CohortError, match="NaN"):
         transport_error(bad, ideal)
+
+
+def test_the_two_group_cohort_has_its_ideal_too():
+    """make_two_group_cohort with the atlas's anatomy: every subject is its own ideal, the
+    patients' with the planted abnormality, the controls' without."""
+    from ladders.study.population import make_two_group_cohort
+
+    data = make_two_group_cohort(8, abnormality=MotionAbnormality(), n_vertices=K,
+                                 seed=4, model=FIXED_ANATOMY)  # fmt: skip
+    np.testing.assert_allclose(ideal_transport(data, FIXED_ANATOMY),
+                               data.cohort.es - data.cohort.ed, atol=1e-12)  # fmt: skip

@@ -1,10 +1,15 @@
-"""``symladders cohort``: the synthetic cohort in two groups with a planted abnormality, to a folder.
+"""``symladders cohort``: the synthetic cohort in groups with planted effects, to a folder.
 
 A thin wrapper of :func:`~ladders.study.population.make_two_group_cohort` and
 :func:`~ladders.study.population.write_two_group_cohort`: the meshes in the layout
 ``symladders study --meshes`` reads, ``groups.csv`` (subject, group) and
 ``planted_region.json`` (the abnormality and its affected atlas vertices) next to
-them.
+them. With ``--group`` (any number of groups, each with its own abnormality),
+``--anatomy`` (a group's anatomy changed, its motion relative to it kept) or a covariate
+option (``--imbalance``, ``--age-effect``, ``--sex-effect``, ``--body-size-sd``,
+``--design``), it wraps :func:`~ladders.study.population.make_covariate_cohort` and
+:func:`~ladders.study.population.write_covariate_cohort` instead, which also write
+``design.csv`` (subject, group, age, sex, body_size) for ``symladders analyze --design``.
 """
 
 from __future__ import annotations
@@ -50,13 +55,58 @@ def _segments(text: str) -> tuple[int, ...]:
     return values
 
 
+def _group(text: str) -> tuple:
+    """``NAME`` or ``NAME=KIND[@SEGMENTS[@MAGNITUDE]]`` -> (name, kind or None, segments, magnitude)."""
+    from ..cohort.planted_effect import EFFECT_KINDS
+
+    name, _, effect = text.partition("=")
+    if not name.strip() or "," in name or name != name.strip():
+        raise argparse.ArgumentTypeError(
+            f"expected NAME[=KIND[@SEGMENTS[@MAGNITUDE]]], got {text!r}"
+        )
+    if not effect:
+        return name, None, None, None
+    parts = effect.split("@")
+    if parts[0] not in EFFECT_KINDS or len(parts) > 3:
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected NAME=KIND[@SEGMENTS[@MAGNITUDE]] with KIND one of "
+            f"{', '.join(EFFECT_KINDS)}"
+        )
+    segments = _segments(parts[1]) if len(parts) > 1 else None
+    magnitude = _nonnegative(parts[2]) if len(parts) > 2 else None
+    return name, parts[0], segments, magnitude
+
+
+_ANATOMY_KEYS = ("scale", "sphericity", "bulge")
+
+
+def _anatomy(text: str) -> tuple:
+    """``NAME=key:value,...`` with keys scale, sphericity, bulge -> (name, {key: value})."""
+    name, _, spec = text.partition("=")
+    fields = {}
+    try:
+        for item in spec.split(","):
+            key, _, value = item.partition(":")
+            if key.strip() not in _ANATOMY_KEYS:
+                raise ValueError
+            fields[key.strip()] = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected NAME=KEY:VALUE[,KEY:VALUE...] with keys {', '.join(_ANATOMY_KEYS)}, "
+            f"got {text!r}"
+        ) from None
+    if not name.strip():
+        raise argparse.ArgumentTypeError(f"expected a group NAME before '=', got {text!r}")
+    return name.strip(), fields
+
+
 def add_cohort_parser(sub) -> None:
     """Register the ``cohort`` subcommand on an argparse subparsers object."""
     from ..cohort.planted_effect import DEFAULT_MAGNITUDE, EFFECT_KINDS
 
     p = sub.add_parser(
         "cohort",
-        help="write the synthetic cohort in two groups with a planted motion abnormality",
+        help="write the synthetic cohort in groups with planted motion abnormalities",
         description=(
             "Write the built-in synthetic left-ventricle cohort as meshes, its subjects split "
             "into patients and controls, with a regional motion abnormality planted in the "
@@ -64,7 +114,9 @@ def add_cohort_parser(sub) -> None:
             "<name>_es.<ext>, groups.csv and planted_region.json (the truth for 'symladders "
             "analyze --truth'). Kinds: "
             + "; ".join(f"{k}: {v}" for k, v in EFFECT_KINDS.items())
-            + ". Realism knobs, all off by default: --noise, --remesh, --pose."
+            + ". Realism knobs, all off by default: --noise, --remesh, --pose. Several groups, "
+            "anatomy shifts and covariates (age, sex, body size acting on the shapes): --group, "
+            "--anatomy, --imbalance, ...; they also write design.csv."
         ),
         formatter_class=DefaultsFormatter,
     )
@@ -100,6 +152,32 @@ def add_cohort_parser(sub) -> None:
                    help="also write landmarks.csv: apex, base-plane centre and septal point of "
                         "the atlas and of every subject (posed with it), for 'symladders "
                         "correspond' and 'symladders atlas'")  # fmt: skip
+    g = p.add_argument_group(
+        "several groups, anatomy and covariates",
+        "any of these writes design.csv too; the subjects are split evenly between the groups",
+    )
+    g.add_argument("--group", type=_group, action="append", default=None,
+                   metavar="NAME[=KIND[@SEGMENTS[@MAGNITUDE]]]",
+                   help="a group and its abnormality, repeated once per group in order (the "
+                        "first is the reference), e.g. --group controls --group "
+                        "lad=hypokinesia@7,8,13,14 --group rca=radial@3,4,9,10@0.6 "
+                        "(default: controls and patients with --effect)")  # fmt: skip
+    g.add_argument("--anatomy", type=_anatomy, action="append", default=None,
+                   metavar="NAME=KEY:VALUE,...",
+                   help="change a group's end-diastolic anatomy, its motion relative to it "
+                        "kept: scale (every length), sphericity (the base radius), bulge "
+                        "(added), e.g. --anatomy patients=scale:1.15,sphericity:1.1")  # fmt: skip
+    g.add_argument("--imbalance", type=_fraction, default=None,
+                   help="how much the other groups' age, body size and sex differ from the "
+                        "first group's (0-1; 1: two SD of age and body size; default 0)")  # fmt: skip
+    g.add_argument("--age-effect", type=_nonnegative, default=None,
+                   help="relative reduction of the contraction per SD of age (default 0.1)")  # fmt: skip
+    g.add_argument("--sex-effect", type=float, default=None,
+                   help="relative reduction of the males' contraction (default 0)")  # fmt: skip
+    g.add_argument("--body-size-sd", type=_nonnegative, default=None,
+                   help="SD of the body size, a length factor of mean 1 (default 0.08)")  # fmt: skip
+    g.add_argument("--design", action="store_true",
+                   help="write design.csv with the default covariates even without the options above")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk",
@@ -107,8 +185,71 @@ def add_cohort_parser(sub) -> None:
     p.set_defaults(run=run_cohort_command, output_is_file=False)
 
 
+_COVARIATE_OPTIONS = ("imbalance", "age_effect", "sex_effect", "body_size_sd")
+
+
+def _several_groups(args) -> bool:
+    return bool(args.group or args.anatomy or args.design) or any(
+        getattr(args, k) is not None for k in _COVARIATE_OPTIONS
+    )
+
+
+def _run_covariate_cohort(args, abnormality) -> int:
+    """The cohort in several groups with covariates (``make_covariate_cohort``)."""
+    from pathlib import Path
+
+    from ..cohort.planted_effect import MotionAbnormality
+    from ..errors import CohortError
+    from ..population import (
+        AnatomyShift,
+        CohortGroup,
+        Covariates,
+        make_covariate_cohort,
+        write_covariate_cohort,
+    )
+
+    try:
+        if args.group:
+            specs = [(name, None if kind is None else MotionAbnormality(
+                kind, segments or (7, 8, 13, 14), magnitude)) for name, kind, segments, magnitude
+                in args.group]  # fmt: skip
+        else:
+            specs = [("controls", None), ("patients", abnormality)]
+        names = [name for name, _ in specs]
+        shifts = {}
+        for name, fields in args.anatomy or []:
+            if name not in names:
+                raise CohortError(f"--anatomy {name}: no such group (groups: {', '.join(names)})")
+            shifts[name] = AnatomyShift(**fields)
+        groups = [CohortGroup(name, effect, shifts.get(name)) for name, effect in specs]
+        options = {k: getattr(args, k) for k in _COVARIATE_OPTIONS if getattr(args, k) is not None}
+        covariates = Covariates(**options)
+        n = len(groups)
+        sizes = [args.subjects // n + (i < args.subjects % n) for i in range(n)]
+        data = make_covariate_cohort(sizes, groups, covariates, args.seed, args.vertices,
+                                     args.noise, args.noise_length)  # fmt: skip
+    except CohortError as exc:
+        raise UsageError(f"symladders cohort: error: {exc}") from None
+    folder = write_covariate_cohort(
+        data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
+        pose=args.pose, landmarks=args.landmarks,
+    )  # fmt: skip
+    counts = ", ".join(f"{g.name} {sum(v == g.name for v in data.groups.values())}" for g in groups)
+    print(f"symladders cohort: {len(data.cohort)} subjects ({counts}), "
+          f"{data.cohort.n_vertices} vertices, in {folder}")  # fmt: skip
+    for g in groups:
+        region = data.regions[g.name]
+        planted = [] if g.abnormality is None else [
+            f"{g.abnormality.describe()} ({int(region.affected.sum())} atlas vertices)"]  # fmt: skip
+        planted += [] if g.anatomy is None else [f"anatomy {g.anatomy}"]
+        print(f"  {g.name}: {'; '.join(planted) or 'no planted effect'}")
+    print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
+          f"truth: {folder / 'planted_region.json'}")  # fmt: skip
+    return 0
+
+
 def run_cohort_command(args) -> int:
-    """Write the two-group cohort from parsed arguments."""
+    """Write the two-group cohort (or the cohort in several groups) from parsed arguments."""
     from pathlib import Path
 
     from ..cohort.planted_effect import MotionAbnormality
@@ -123,6 +264,8 @@ def run_cohort_command(args) -> int:
         )
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
+    if _several_groups(args):
+        return _run_covariate_cohort(args, abnormality)
     data = make_two_group_cohort(
         args.subjects, args.patients, abnormality, args.vertices, args.seed, args.noise,
         args.noise_length,

@@ -9,12 +9,23 @@
 - :mod:`.aha_segments`: the AHA 17-segment model on the synthetic ventricle;
 - :mod:`.planted_effect`: a regional motion abnormality and its ground truth on the atlas;
 - :mod:`.segmentation_noise`: smooth random normal displacements of a surface;
-- :mod:`.groups_table`: the ``subject,group`` table.
+- :mod:`.groups_table`: the ``subject,group`` table;
+- :mod:`.cardiac_cycle`: the whole cycle, a time course and a motion of the volume
+  (:func:`cycle_frames`, :func:`motion_forward`, :func:`motion_inverse`); a two-group
+  cohort's cycles are in :mod:`ladders.study.population.cycle_cohort`.
 """
 
 from ..errors import CohortError, MeshFolderError, MissingAtlasError
 from .aha_segments import AHA_SEGMENTS, segment_of, segment_weights
 from .benchmark_shapes import bent_ellipsoid
+from .cardiac_cycle import (
+    check_invertible,
+    cycle_fraction,
+    cycle_frames,
+    frame_times,
+    motion_forward,
+    motion_inverse,
+)
 from .cohort import Cohort, Subject
 from .cohort_statistics import CohortStatistics, cohort_statistics
 from .cohort_table import read_cohort_table
@@ -71,4 +82,10 @@ __all__ = [
     "smooth_normal_noise",
     "groups_csv",
     "read_groups",
+    "check_invertible",
+    "cycle_fraction",
+    "cycle_frames",
+    "frame_times",
+    "motion_forward",
+    "motion_inverse",
 ]

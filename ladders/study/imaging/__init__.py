@@ -11,9 +11,23 @@
   the right ventricle's label (:func:`landmarks_from_labels`);
 - :mod:`.voxelize`: label images of known surfaces, the ground truth
   (:func:`voxelize`, :func:`short_axis_affine`, :func:`write_label_image`), and
-  :mod:`.rv_label`: a right-ventricle label beside them (:func:`add_rv_label`).
+  :mod:`.rv_label`: a right-ventricle label beside them (:func:`add_rv_label`);
+- :mod:`.cine`: label and intensity images of the synthetic ventricle through the
+  cycle, rendered from the known motion, and 4-D series (:func:`render_labels`,
+  :func:`render_cine`, :func:`write_series`).
 """
 
+from .cine import (
+    BACKGROUND,
+    BLOOD_POOL,
+    MYOCARDIUM,
+    TagGrid,
+    ed_labels,
+    render_cine,
+    render_labels,
+    tag_pattern,
+    write_series,
+)
 from .label_images import IMAGE_SUFFIXES, ImageError, LabelImage, image_stem, read_label_image
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
 from .rv_label import add_rv_label, voxel_centres
@@ -52,4 +66,13 @@ __all__ = [
     "label_centroid",
     "landmarks_from_labels",
     "lv_apex_and_base",
+    "BACKGROUND",
+    "BLOOD_POOL",
+    "MYOCARDIUM",
+    "TagGrid",
+    "ed_labels",
+    "render_cine",
+    "render_labels",
+    "tag_pattern",
+    "write_series",
 ]

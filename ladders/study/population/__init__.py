@@ -2,6 +2,8 @@
 
 - :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
   motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
+  :mod:`.cycle_cohort`: its whole cardiac cycle, every subject's frames and images
+  (:func:`make_two_group_cycles`, :func:`two_group_cycles`);
 - :mod:`.covariate_cohort`: the synthetic cohort in several groups (planted abnormalities,
   anatomy shifts) with age, sex and body size acting on the shapes, and its design table
   (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`); :mod:`.ideal_transport`:
@@ -54,6 +56,12 @@ from .covariate_cohort import (
     Covariates,
     make_covariate_cohort,
     write_covariate_cohort,
+)
+from .cycle_cohort import (
+    CYCLE_ABNORMALITY,
+    CohortCycles,
+    make_two_group_cycles,
+    two_group_cycles,
 )
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
 from .ideal_transport import MOTION_PARAMETERS, ideal_transport, transport_error
@@ -128,6 +136,10 @@ __all__ = [
     "TwoGroupCohort",
     "make_two_group_cohort",
     "write_two_group_cohort",
+    "CYCLE_ABNORMALITY",
+    "CohortCycles",
+    "make_two_group_cycles",
+    "two_group_cycles",
     "AnatomyShift",
     "CohortGroup",
     "CovariateCohort",

@@ -27,6 +27,7 @@ from ..cohort.synthetic_lv import (
 )
 from ..errors import CohortError
 from .covariate_cohort import CovariateCohort
+from .two_groups import PATIENTS, TwoGroupCohort
 
 __all__ = ["MOTION_PARAMETERS", "ideal_transport", "transport_error"]
 
@@ -43,15 +44,29 @@ MOTION_PARAMETERS = (
 )
 
 
-def ideal_transport(data: CovariateCohort, model: SyntheticLVModel | None = None) -> np.ndarray:
+def _abnormalities(data) -> dict:
+    """``{subject: MotionAbnormality or None}`` of a generated cohort."""
+    if isinstance(data, CovariateCohort):
+        effects = {spec.name: spec.abnormality for spec in data.specs}
+        return {name: effects[group] for name, group in data.groups.items()}
+    if isinstance(data, TwoGroupCohort):
+        planted = None if data.region is None else data.region.abnormality
+        return {n: planted if g == PATIENTS else None for n, g in data.groups.items()}
+    raise CohortError(
+        f"data: expected a CovariateCohort or a TwoGroupCohort, got {type(data).__name__}"
+    )
+
+
+def ideal_transport(data, model: SyntheticLVModel | None = None) -> np.ndarray:
     """Each subject's motion parameters applied to the atlas's anatomy, as a displacement.
 
     Parameters
     ----------
-    data : CovariateCohort
-        A cohort of :func:`~ladders.study.population.make_covariate_cohort` (its subjects
-        keep the parameters they were drawn with, after the covariates and the anatomy
-        shifts acted on them).
+    data : CovariateCohort or TwoGroupCohort
+        A cohort of :func:`~ladders.study.population.make_covariate_cohort` or
+        :func:`~ladders.study.population.make_two_group_cohort` (its subjects keep the
+        parameters they were drawn with, after the covariates and the anatomy shifts
+        acted on them; segmentation noise is not part of the motion).
     model : SyntheticLVModel, optional
         The model the cohort was drawn with (default ``SyntheticLVModel()``).
 
@@ -67,8 +82,7 @@ def ideal_transport(data: CovariateCohort, model: SyntheticLVModel | None = None
         (another model, or a cohort not drawn by the generator), or a subject has no
         parameters.
     """
-    if not isinstance(data, CovariateCohort):
-        raise CohortError(f"data: expected a CovariateCohort, got {type(data).__name__}")
+    planted = _abnormalities(data)
     model = model or SyntheticLVModel()
     cohort = data.cohort
     theta, phi, _ = lv_grid(*grid_shape(cohort.atlas.shape[0]), model)
@@ -79,18 +93,16 @@ def ideal_transport(data: CovariateCohort, model: SyntheticLVModel | None = None
             "data: its atlas is not the mid-range anatomy of this model on its grid "
             "(pass the SyntheticLVModel the cohort was drawn with)"
         )
-    modulations = {
-        spec.name: None
-        if spec.abnormality is None
-        else planted_modulation(spec.abnormality, theta, phi)
-        for spec in data.specs
-    }
+    modulations = {None: None}
+    for abnormality in planted.values():
+        if abnormality not in modulations:
+            modulations[abnormality] = planted_modulation(abnormality, theta, phi)
     out = np.empty((len(cohort.subjects),) + atlas.shape)
     for i, s in enumerate(cohort.subjects):
         if s.parameters is None:
             raise CohortError(f"data: subject {s.name} has no generator parameters")
         motion = {name: getattr(s.parameters, name) for name in MOTION_PARAMETERS}
-        _, es = lv_shapes(replace(mean, **motion), theta, phi, modulations[data.groups[s.name]])
+        _, es = lv_shapes(replace(mean, **motion), theta, phi, modulations[planted[s.name]])
         out[i] = es - atlas
     return out
 
