@@ -30,6 +30,8 @@ transport, with and without the volume normalisation:
 from __future__ import annotations
 
 import argparse
+import json
+import re
 import sys
 import time
 from pathlib import Path
@@ -111,10 +113,21 @@ def _subsample_rate(motion, labels, rng, repetitions: int, permutations: int):
 def _label(m) -> str:
     if m.method == "none":
         return "no transport"
-    return f"{m.deformation.upper()} {m.label}, alpha^2 = {m.alpha2:g}"
+    prefix = "" if m.label.startswith(m.deformation.upper()) else f"{m.deformation.upper()} "
+    return f"{prefix}{m.label}, alpha^2 = {m.alpha2:g}"
+
+
+def _load_rows(path: Path) -> dict:
+    """Rows measured before (``rows.json`` in the work folder), by label."""
+    if not path.is_file():
+        return {}
+    return {r["label"]: r for r in json.loads(path.read_text())}
 
 
 def _rows(work, n, permutations, repetitions, rng):
+    """Every motion's row; rows of ``work/rows.json`` are kept (a rerun measures the rest)."""
+    cache = work / "rows.json"
+    done = _load_rows(cache)
     data = {name: _cohort(name, n) for name in COHORTS}
     ideal = ideal_transport(data["anatomy"])
     groups = np.array([data["anatomy"].groups[s.name] == "dilated"
@@ -126,33 +139,50 @@ def _rows(work, n, permutations, repetitions, rng):
         for normalize in (None, "volume"):
             if normalize and motion.method == "none":
                 continue
+            label = _label(motion) + (", volume-normalised" if normalize else "")
+            if label in done:
+                rows.append(done[label])
+                continue
             try:
-                m = motion if normalize is None else normalize_motion(motion)[0]
+                m, scales = (motion, None) if normalize is None else normalize_motion(motion)
             except CohortError as exc:  # a transported motion no scale brings to the ratio
                 print(f"{motion.name}, volume-normalised: {exc}", flush=True)
-                rows.append({"label": _label(motion) + ", volume-normalised", "failed": str(exc)})
+                rows.append({"label": label, "failed": str(exc)})
                 continue
             order = [data["anatomy"].cohort.names.index(s) for s in m.subjects]
             error = transport_error(m.displacement, ideal[order])
             labels = groups[order]
             null = compare_groups(m, labels, ("dilated", "controls"), permutations, rng=rng)
             rate = _subsample_rate(m, labels, rng, repetitions, min(permutations, 1000))
-            e = compare_groups(effect[motion.name], labels, ("dilated", "controls"), permutations,
-                               rng=rng, normalize=normalize)  # fmt: skip
-            found = {t: e.detected(0.05, t) for t in ("displacement", "normal")}
+            try:
+                e = compare_groups(effect[motion.name], labels, ("dilated", "controls"),
+                                   permutations, rng=rng, normalize=normalize)  # fmt: skip
+                found = {t: e.detected(0.05, t) for t in ("displacement", "normal")}
+            except CohortError as exc:  # the effect cohort's normalisation
+                print(f"{motion.name} with the effect, {normalize}: {exc}", flush=True)
+                found = {t: None for t in ("displacement", "normal")}
             rows.append({
-                "label": _label(motion) + (", volume-normalised" if normalize else ""),
+                "label": label, "rate": list(rate),
+                "scale_max": None if scales is None else float(scales.max()),
                 "ideal_controls": float(np.median(error[~labels])),
                 "ideal_dilated": float(np.median(error[labels])),
                 "null_displacement": float(null.detected(0.05, "displacement").mean()),
                 "null_normal": float(null.detected(0.05, "normal").mean()),
                 "null_global_p": float(null.global_test.p_permutation),
-                "rate": rate,
-                **{f"power_{t}": detection_power(f, region) for t, f in found.items()},
-                **{f"dice_{t}": dice(f, region) for t, f in found.items()},
+                **{f"power_{t}": None if f is None else detection_power(f, region)
+                   for t, f in found.items()},
+                **{f"dice_{t}": None if f is None else dice(f, region) for t, f in found.items()},
             })  # fmt: skip
             print(rows[-1], flush=True)
+            done[label] = rows[-1]
+            cache.write_text(json.dumps(list(done.values()), indent=1))
     return rows
+
+
+def _pair(row: dict, test: str) -> str:
+    if row[f"power_{test}"] is None:
+        return "undefined"
+    return f"{row[f'power_{test}']:.2f} / {row[f'dice_{test}']:.2f}"
 
 
 def _table(rows, n, permutations, repetitions) -> str:
@@ -165,15 +195,16 @@ def _table(rows, n, permutations, repetitions) -> str:
     ]
     for r in rows:
         if "failed" in r:
-            lines.append(f"| {r['label']} | undefined: {r['failed']} | | | | | |")
+            who = re.search(r"subject (\S+)'s", r["failed"])
+            lines.append(f"| {r['label']} | undefined: no scale in [0, 16] reaches the volume "
+                         f"change of {who.group(1) if who else 'a subject'} | | | | | |")  # fmt: skip
             continue
         rate, low, high = r["rate"]
         lines.append(
             f"| {r['label']} | {r['ideal_controls']:.2f} / {r['ideal_dilated']:.2f} | "
             f"{100 * r['null_displacement']:.0f} % / {100 * r['null_normal']:.0f} % | "
             f"{r['null_global_p']:.3g} | {rate:.2f} [{low:.2f}, {high:.2f}] | "
-            f"{r['power_displacement']:.2f} / {r['dice_displacement']:.2f} | "
-            f"{r['power_normal']:.2f} / {r['dice_normal']:.2f} |"
+            f"{_pair(r, 'displacement')} | {_pair(r, 'normal')} |"
         )
     note = (
         f"{n} controls against {n} dilated subjects (every length x {SHIFT.scale}, base radius "

@@ -40,7 +40,9 @@ def main(argv=None) -> None:
     )
     print(table, f"({time.perf_counter() - start:.1f} s)")
     if args.publish:
-        publish("cohort_statistics", table, "python benchmarks/bench_cohort_statistics.py --publish")
+        publish(
+            "cohort_statistics", table, "python benchmarks/bench_cohort_statistics.py --publish"
+        )
 
 
 if __name__ == "__main__":

@@ -35,6 +35,13 @@ from generated_tables import machine, publish  # noqa: E402
 from ladders.study.population import ideal_transport, transport_error  # noqa: E402
 
 
+def _label(m) -> str:
+    if m.method == "none":
+        return "no transport"
+    prefix = "" if m.label.startswith(m.deformation.upper()) else f"{m.deformation.upper()} "
+    return f"{prefix}{m.label}, alpha^2 = {m.alpha2:g}"
+
+
 def spread_rows(work: Path, name: str) -> list[dict]:
     """One row per motion of the cohort ``name`` (arm ``corresponded``)."""
     data = _cohort(name, 40)
@@ -48,12 +55,11 @@ def spread_rows(work: Path, name: str) -> list[dict]:
         d = m.displacement[:, region]
         a, b = d[labels], d[~labels]
         difference = np.linalg.norm(a.mean(axis=0) - b.mean(axis=0), axis=1).mean()
-        pooled = (((a - a.mean(axis=0)) ** 2).sum(axis=0) + ((b - b.mean(axis=0)) ** 2).sum(axis=0))
+        pooled = ((a - a.mean(axis=0)) ** 2).sum(axis=0) + ((b - b.mean(axis=0)) ** 2).sum(axis=0)
         pooled = np.sqrt((pooled.sum(axis=1) / (len(d) - 2)).mean())
         error = transport_error(m.displacement, ideal[order])
         rows.append({
-            "label": "no transport" if m.method == "none"
-            else f"{m.deformation.upper()} {m.label}, alpha^2 = {m.alpha2:g}",
+            "label": _label(m),
             "difference": difference, "spread": pooled, "ideal": float(np.median(error)),
         })  # fmt: skip
     return rows

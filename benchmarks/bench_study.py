@@ -12,14 +12,23 @@ cores). ``--deformation both`` runs the LDDMM and the SVF studies (targets doubl
 instead of a temporary folder; the folder must not hold results of the same
 settings, or they would be reused.
 
+``--publish`` writes each setting's row into a table of one row per CPU
+(``generated_tables.publish_rows``): ``docs/generated/study_<deformation>.md`` for the
+default setting, ``study_<deformation>_full.md`` for the full one. A run replaces the
+row of its CPU (model and SIMD level) and keeps the others; the row records the
+1-minute load average at the start of the run, since other jobs may share the CPU.
+A table published before it kept one row per CPU becomes the first stored row.
+
 Usage: ``python benchmarks/bench_study.py [--full] [--deformation lddmm|svf|both]
-[--kernel-backend numpy|numba|auto] [--keep DIR] [-- extra study flags]``.
+[--kernel-backend numpy|numba|auto] [--keep DIR] [--publish] [-- extra study flags]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import resource
 import subprocess
 import sys
@@ -28,6 +37,8 @@ import time
 from pathlib import Path
 
 TARGETS_S = {"default": 300.0, "full": 1800.0}
+HEADER = ["load", "subjects x alpha^2", "wall time", "per subject", "registrations",
+          "iterations / flow passes each", "converged", "peak RSS", "target"]  # fmt: skip
 
 
 def _manifests(folder: Path) -> list[dict]:
@@ -52,6 +63,7 @@ def run(setting, backend, jobs, deformation, extra, keep=None) -> dict:
         args += ["--deformation", deformation, *extra]
         if setting == "full":
             args.append("--full")
+        load = os.getloadavg()[0]
         start = time.perf_counter()
         proc = subprocess.run(args, capture_output=True, text=True)
         seconds = time.perf_counter() - start
@@ -62,6 +74,7 @@ def run(setting, backend, jobs, deformation, extra, keep=None) -> dict:
     total = lambda key: sum(m[key] for m in manifests)  # noqa: E731
     return {
         "setting": setting,
+        "load": load,
         "seconds": seconds,
         "subjects": manifests[0]["n_subjects"],
         "alpha2": manifests[0]["config"]["alpha2"],
@@ -84,7 +97,7 @@ def main(argv=None) -> int:
                         help="write the table to docs/generated (README and docs include it)")  # fmt: skip
     parser.add_argument("extra", nargs="*", help="further flags of symladders study (after --)")
     args = parser.parse_args(argv)
-    rows = []
+    rows = {}
     settings = ["default", "full"] if args.full else ["default"]
     print(f"kernel backend: {args.kernel_backend}, jobs: {args.jobs}, {args.deformation}")
     for setting in settings:
@@ -101,24 +114,51 @@ def main(argv=None) -> int:
             f"peak RSS {r['peak_rss_mb']:.0f} MB; target <= {target / 60:.0f} min: {met}"
         )
         n = max(r["registrations"], 1)
-        rows.append(
-            f"| {setting}: {r['subjects']} subjects x {len(r['alpha2'])} alpha^2, "
-            f"{args.deformation} | {r['seconds']:.0f} s | {r['seconds'] / r['subjects']:.1f} s | "
-            f"{r['registrations']:,} | {r['iterations'] / n:.0f} / {r['flow_passes'] / n:.0f} | "
-            f"{1 - r['non_converged'] / n:.1%} | {r['peak_rss_mb']:.0f} MB | "
-            f"{target / 60:.0f} min: {met} |"
-        )
+        rows[setting] = dict(zip(HEADER, [
+            f"{r['load']:.2f}", f"{r['subjects']} x {len(r['alpha2'])}", f"{r['seconds']:.0f} s",
+            f"{r['seconds'] / r['subjects']:.1f} s", f"{r['registrations']:,}",
+            f"{r['iterations'] / n:.0f} / {r['flow_passes'] / n:.0f}",
+            f"{1 - r['non_converged'] / n:.1%}", f"{r['peak_rss_mb']:.0f} MB",
+            f"{target / 60:.0f} min: {met}",
+        ]))  # fmt: skip
     if args.publish:
         sys.path.insert(0, str(Path(__file__).resolve().parent))
-        from generated_tables import publish
+        from generated_tables import GENERATED, publish_rows
 
-        head = ("| study | wall time | per subject | registrations | iterations / flow passes "
-                "each | converged | peak RSS | target |\n|---|---|---|---|---|---|---|---|")  # fmt: skip
-        name = f"study_{args.deformation}" + ("_full" if args.full else "")
-        publish(name, head + "\n" + "\n".join(rows),
-                f"python benchmarks/bench_study.py{' --full' if args.full else ''} "
-                f"--deformation {args.deformation} --publish")  # fmt: skip
+        for setting, row in rows.items():
+            name = f"study_{args.deformation}" + ("_full" if setting == "full" else "")
+            publish_rows(name, HEADER, row,
+                         f"python benchmarks/bench_study.py{' --full' if args.full else ''} "
+                         f"--deformation {args.deformation} --publish",
+                         seed=earlier_rows(GENERATED, name))  # fmt: skip
     return 0
+
+
+def earlier_rows(folder: Path, name: str) -> list[dict]:
+    """The row of ``<name>.md`` as published before the table kept one row per CPU.
+
+    Used once, when ``<name>.rows.json`` does not exist yet: the measured row (its
+    CPU, cores, SIMD level, date and cells, the study's setting shortened to
+    ``subjects x alpha^2``) becomes the first stored row; [] if there is none.
+    """
+    from generated_tables import read_table
+
+    path = folder / f"{name}.md"
+    if (folder / f"{name}.rows.json").exists() or not path.is_file():
+        return []
+    if "one row per CPU" in path.read_text(encoding="utf-8").splitlines()[0]:
+        return []
+    old = read_table(path)
+    seed = []
+    for cells in old["rows"]:
+        cells = dict(cells)
+        study = cells.pop("study", "")
+        match = re.search(r"(\d+) subjects x (\d+) alpha\^2", study)
+        if match:
+            cells["subjects x alpha^2"] = f"{match[1]} x {match[2]}"
+        seed.append({"cpu": old["cpu"], "cores": old["cores"], "simd": old["simd"],
+                     "date": old["date"], "cells": cells})  # fmt: skip
+    return seed
 
 
 if __name__ == "__main__":

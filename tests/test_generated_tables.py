@@ -1,11 +1,17 @@
 """Every benchmark figure in the README and the docs comes from its generated table, unedited."""
 
+import datetime
+import json
 import re
+import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import generated_tables  # noqa: E402
+
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 REGION = re.compile(r"<!-- BEGIN generated/(\S+) -->\n(.*?)<!-- END generated/\1 -->", re.S)
 
@@ -37,3 +43,41 @@ def test_the_table_of_contents_lists_every_page():
     toc = re.search(r"```\{toctree\}\n(.*?)```", index, re.S).group(1).split()
     pages = {p.stem for p in (ROOT / "docs").glob("*.md")} - {"index"}
     assert pages <= set(toc), sorted(pages - set(toc))
+
+
+@pytest.mark.parametrize("store", sorted((ROOT / "docs" / "generated").glob("*.rows.json")))
+def test_per_cpu_tables_list_their_stored_rows(store):
+    text = store.with_name(store.name.replace(".rows.json", ".md")).read_text(encoding="utf-8")
+    stored = json.loads(store.read_text(encoding="utf-8"))
+    assert generated_tables._render_rows(stored["header"], stored["rows"]) in text
+
+
+def test_publish_rows_replaces_this_cpus_row_and_keeps_the_others(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("intro\n<!-- BEGIN generated/t -->\nold\n<!-- END generated/t -->\nend\n")
+    other = {"cpu": "Other CPU", "cores": 64, "simd": "avx512", "date": "2020-01-02",
+             "cells": {"time": "1 s"}}  # fmt: skip
+    header = ["load", "time"]
+    publish = lambda cells: generated_tables.publish_rows(  # noqa: E731
+        "t", header, cells, "python bench.py", seed=[other], folder=tmp_path, pages=[page]
+    )
+    publish({"load": "0.50", "time": "9 s"})
+    path = publish({"load": "0.25", "time": "7 s"})  # the seed is used only once
+    stored = json.loads((tmp_path / "t.rows.json").read_text())["rows"]
+    assert [r["cpu"] for r in stored] == ["Other CPU", generated_tables._cpu_model()]
+    assert stored[0] == other and stored[1]["cells"] == {"load": "0.25", "time": "7 s"}
+    text = path.read_text()
+    assert re.search(r"cores, \w+, measured \d{4}-\d\d-\d\d", text.splitlines()[0])
+    today = datetime.date.today().isoformat()
+    assert "| CPU | date | load | time |" in text
+    assert "| Other CPU, 64 cores, avx512 | 2020-01-02 | – | 1 s |" in text
+    here = generated_tables.this_cpu()
+    assert (
+        f"| {here['cpu']}, {here['cores']} cores, {here['simd']} | {today} | 0.25 | 7 s |" in text
+    )
+    assert "9 s" not in text
+    assert (
+        page.read_text()
+        == f"intro\n<!-- BEGIN generated/t -->\n{text}<!-- END generated/t -->\nend\n"
+    )
+    assert not (ROOT / "docs" / "generated" / "t.md").exists()

@@ -100,8 +100,23 @@ def test_mode_shapes_and_amplitude_on_the_sphere():
     scaled, lam = normalize_amplitude(space, base, u, lambda p: space.dist(base, p), 0.6)
     assert lam == pytest.approx(0.6 / np.linalg.norm(u), rel=1e-9)
     np.testing.assert_allclose(scaled, lam * u)
-    with pytest.raises(ValueError, match="both on one side"):
+    with pytest.raises(ValueError, match="always on one side"):
         normalize_amplitude(space, base, u, lambda p: space.dist(base, p), 5.0, bracket=(0, 1))
+
+
+def test_normalize_amplitude_finds_the_first_crossing_of_a_measure_that_turns_back():
+    """``d (3 - d)`` of the distance ``d`` rises to 2.25 then falls below 0 at the bracket's
+    end: the ends are on one side of the target 2, the roots at ``d = 1`` and ``d = 2``;
+    the smallest scale that reaches the target is returned."""
+    space = Euclidean((3,))
+    base, u = np.zeros(3), np.array([0.6, 0.0, 0.8])
+
+    def measure(p):
+        d = space.dist(base, p)
+        return d * (3.0 - d)
+
+    _, lam = normalize_amplitude(space, base, u, measure, 2.0, bracket=(0.0, 4.0))
+    assert lam == pytest.approx(1.0, abs=1e-9)
 
 
 def test_pca_of_residual_tangents_of_lddmm_uses_the_product_metric():

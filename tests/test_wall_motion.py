@@ -357,3 +357,21 @@ def test_scores_and_outputs_carry_the_wall_motion(planted, tmp_path):
     )
     figure = plot_pvalue_map(c, tmp_path / "p.png", data.region.weight)  # five panels
     assert figure.stat().st_size > 0
+
+
+def test_the_volume_normalisation_reaches_large_scales_and_names_a_lost_motion(planted):
+    """A transported motion eight times too small is scaled back (within [0, 16]); one
+    forty times too small has lost the motion: refused, naming the subject."""
+    from dataclasses import replace
+
+    from ladders.study.errors import CohortError
+
+    _, motion = planted
+    small = motion.subset(motion.subjects[:3])
+    shrunk = replace(small, displacement=small.displacement / 8.0)
+    _, scales = normalize_motion(shrunk, small.volume_ratio)
+    _, direct = normalize_motion(small, small.volume_ratio)
+    np.testing.assert_allclose(scales, 8.0 * direct, rtol=1e-6)
+    lost = replace(small, displacement=small.displacement / 40.0)
+    with pytest.raises(CohortError, match=f"subject {small.subjects[0]}'s transported motion"):
+        normalize_motion(lost, small.volume_ratio)

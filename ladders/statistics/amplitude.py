@@ -40,8 +40,12 @@ def normalize_amplitude(
         A scalar function of a point of ``space``.
     target : float
     bracket : (float, float), default (0, 4)
-        Scales between which the root is searched (:func:`scipy.optimize.brentq`);
-        the measure minus the target must change sign between them.
+        Scales between which the root is searched. The measure is evaluated from
+        ``low`` on a doubling grid of scales (``low + (high - low) 2^-m``, ``m = 7 .. 0``)
+        and the root is the first sign change of the measure minus the target, refined by
+        :func:`scipy.optimize.brentq`: the smallest scale that reaches the target. A
+        measure that is not monotone over the bracket (e.g. a volume ratio once the
+        shot surface folds at large scales) then still gives the root nearest ``low``.
     xtol : float
         Absolute tolerance on ``lam``.
 
@@ -53,7 +57,8 @@ def normalize_amplitude(
     ------
     ValueError
         ``target`` or a value of the measure is not finite, or the bracket holds no root
-        (the message gives the measure at both ends).
+        (the message gives the measure at both ends and its smallest and largest values
+        on the grid).
     """
     target = float(target)
     if not np.isfinite(target):
@@ -68,13 +73,22 @@ def normalize_amplitude(
             raise ValueError(f"measure: not finite at the scale {lam:g}")
         return value - target
 
-    g_low, g_high = gap(low), gap(high)
+    g_low = gap(low)
     if g_low == 0.0:
         return low * tangent, low
-    if np.sign(g_low) == np.sign(g_high):
-        raise ValueError(
-            f"bracket: the measure is {g_low + target:.6g} at scale {low:g} and "
-            f"{g_high + target:.6g} at {high:g}, both on one side of the target {target:.6g}"
-        )
-    lam = float(brentq(gap, low, high, xtol=xtol))
-    return lam * tangent, lam
+    scales = [low + (high - low) * 2.0**-m for m in range(7, -1, -1)]
+    previous, g_previous, seen = low, g_low, [g_low]
+    for scale in scales:
+        g = gap(scale)
+        seen.append(g)
+        if g == 0.0:
+            return scale * tangent, scale
+        if np.sign(g) != np.sign(g_previous):
+            lam = float(brentq(gap, previous, scale, xtol=xtol))
+            return lam * tangent, lam
+        previous, g_previous = scale, g
+    raise ValueError(
+        f"bracket: the measure is {g_low + target:.6g} at scale {low:g} and "
+        f"{seen[-1] + target:.6g} at {high:g}, between {min(seen) + target:.6g} and "
+        f"{max(seen) + target:.6g} on the way, always on one side of the target {target:.6g}"
+    )

@@ -29,6 +29,7 @@ from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
 from .mesh_cli import add_mesh_parser
 from .study_cli import add_study_parser
+from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
 
 __all__ = ["main", "build_parser"]
@@ -48,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_cohort_parser(sub)
     add_analyze_parser(sub)
     add_validate_parser(sub)
+    add_track_parser(sub)
     return parser
 
 

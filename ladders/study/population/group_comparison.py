@@ -25,6 +25,9 @@ that the atlas's relative volume change equals the subject's own (the subject's
 ejection fraction is kept): the amplitude normalisation of transported
 deformations of Guigui, Moceri, Sermesant and Pennec (ISBI 2021), in the point
 distribution model of the atlas (:func:`ladders.statistics.normalize_amplitude`).
+The scale is searched in ``[0, 16]`` (:data:`VOLUME_SCALE_BRACKET`): a transport
+that keeps less than a sixteenth of the subject's volume change has lost the motion,
+and its normalisation fails, naming the subject.
 """
 
 from __future__ import annotations
@@ -137,6 +140,10 @@ class GroupComparison:
         return getattr(self, test).p_fwer < alpha
 
 
+#: Where the volume normalisation's scale is searched.
+VOLUME_SCALE_BRACKET = (0.0, 16.0)
+
+
 def _volume_scale(space, atlas, faces, displacement, target, subject: str = "") -> float:
     base = enclosed_volume(atlas, faces)
 
@@ -144,7 +151,9 @@ def _volume_scale(space, atlas, faces, displacement, target, subject: str = "") 
         return enclosed_volume(shape, faces) / base
 
     try:
-        _, scale = normalize_amplitude(space, atlas, displacement, ratio, target)
+        _, scale = normalize_amplitude(
+            space, atlas, displacement, ratio, target, bracket=VOLUME_SCALE_BRACKET
+        )
     except ValueError as exc:
         raise CohortError(
             f"normalize='volume': no scale of subject {subject}'s transported motion reaches "

@@ -1,0 +1,159 @@
+"""Cine tracking benchmark: the ED mesh followed through synthetic cine images by FFD registration.
+
+For each of ``--n-subjects`` synthetic subjects (``make_synthetic_cohort``, 241
+vertices), a cycle of ``--frames`` frames is rendered (:func:`render_cine`, Gaussian
+noise 0.02, sub-voxel supersampling 2) on two grids, a short-axis stack of
+1.5 x 1.5 x 8 mm slices and a 1.5 mm isotropic grid, with and without tagging lines
+(:class:`TagGrid` defaults), and tracked by :func:`track_cine` (forward and backward
+chains combined). End-systole is the frame ``round(0.35 n)``, the cycle's ES phase set
+to that frame's time, so that the true ES mesh is ``motion_forward(params, ed, 1)``.
+
+Reported per grid and tagging, over subjects: the mean per-vertex ES error split into
+its part along the true ES surface's normal and its tangential part, the mean motion
+(ES vs ED, the error of not moving at all), the twist error (apex minus base rotation
+about the long axis, degrees) and the time per subject and per frame.
+
+Usage: ``python benchmarks/bench_cine_tracking.py [--n-subjects 2] [--frames 25]
+[--grids both|short-axis|isotropic] [--publish]``;
+``--publish`` writes ``docs/generated/tracking_cine.md`` (with the CPU).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from generated_tables import machine, publish  # noqa: E402
+
+from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward  # noqa: E402
+from ladders.study.imaging import TagGrid, render_cine  # noqa: E402
+from ladders.study.tracking.cine_tracking import CineTrackingSettings, track_cine  # noqa: E402
+
+GRIDS = {"short-axis 1.5 x 1.5 x 8 mm": (1.5, 1.5, 8.0), "isotropic 1.5 mm": (1.5, 1.5, 1.5)}
+SETTINGS = CineTrackingSettings(control_point_spacing=20.0, sampling_percentage=0.05, iterations=20)
+
+
+def grid(voxel):
+    lo, hi = np.array([-50.0, -50.0, -16.0]), np.array([50.0, 50.0, 92.0])
+    shape = tuple(int(n) for n in np.ceil((hi - lo) / np.asarray(voxel)) + 1)
+    affine = np.eye(4)
+    affine[:3, :3] = np.diag(voxel)
+    affine[:3, 3] = lo
+    return affine, shape
+
+
+def normals(vertices, faces):
+    tri = vertices[faces]
+    face_n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n = np.zeros_like(vertices)
+    for corner in range(3):
+        np.add.at(n, faces[:, corner], face_n)
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def rotation_deg(before, after):
+    a = np.arctan2(after[:, 1], after[:, 0]) - np.arctan2(before[:, 1], before[:, 0])
+    return np.degrees(np.mean((a + np.pi) % (2 * np.pi) - np.pi))
+
+
+def twist(params, ed, es):
+    z, rho = ed[:, 2] / params.long_axis, np.hypot(ed[:, 0], ed[:, 1])
+    apex, base = (z < 0.3) & (rho > 5.0), z > 0.7
+    return rotation_deg(ed[apex], es[apex]) - rotation_deg(ed[base], es[base])
+
+
+def run(n_subjects: int, n_frames: int, settings=SETTINGS, grids=tuple(GRIDS)):
+    cohort = make_synthetic_cohort(n_subjects, n_vertices=241, seed=0)
+    es_frame = int(round(0.35 * n_frames))
+    fractions = cycle_fraction(np.arange(n_frames) / n_frames, es_frame / n_frames)
+    rows = []
+    for grid_name in grids:
+        voxel = GRIDS[grid_name]
+        affine, shape = grid(voxel)
+        for tagging in (TagGrid(), None):
+            out = {"normal": [], "tangential": [], "motion": [], "twist": [], "seconds": []}
+            for i, subject in enumerate(cohort.subjects):
+                params, ed = subject.parameters, subject.ed
+                rng = np.random.default_rng(100 + i)
+                series = np.stack(
+                    [render_cine(params, affine, shape, f, rng, noise=0.02, tagging=tagging,
+                                 supersample=2) for f in fractions]
+                )  # fmt: skip
+                start = time.perf_counter()
+                tracked = track_cine(series, affine, ed, settings)
+                out["seconds"].append(time.perf_counter() - start)
+                truth = motion_forward(params, ed, fractions[es_frame])
+                error = tracked[es_frame] - truth
+                n = normals(truth, cohort.faces)
+                along = np.einsum("ij,ij->i", error, n)
+                out["normal"].append(np.abs(along).mean())
+                out["tangential"].append(np.linalg.norm(error - along[:, None] * n, axis=1).mean())
+                out["motion"].append(np.linalg.norm(truth - ed, axis=1).mean())
+                out["twist"].append(
+                    abs(twist(params, ed, tracked[es_frame]) - twist(params, ed, truth))
+                )
+                print(grid_name, "tagged" if tagging else "plain", subject.name,
+                      {k: round(v[-1], 3) for k, v in out.items()}, flush=True)  # fmt: skip
+            rows.append(
+                (
+                    grid_name,
+                    tagging is not None,
+                    shape,
+                    {k: float(np.mean(v)) for k, v in out.items()},
+                )
+            )
+    return rows, es_frame
+
+
+def table(rows, n_subjects, n_frames, es_frame, settings=SETTINGS) -> str:
+    lines = [
+        f"{n_subjects} synthetic subject(s), {n_frames} frames (ES = frame {es_frame}), "
+        f"control points {settings.control_point_spacing:g} mm apart, {settings.metric}, "
+        f"{settings.optimizer}, {settings.iterations} iterations per level, shrink "
+        f"{settings.shrink_factors}, sampling {settings.sampling_percentage:g}, "
+        f"combine={settings.combine}, {settings.threads} thread(s). Errors at ES, mean over "
+        "vertices and subjects, mm.",
+        "",
+        "| grid | voxels | tagging | normal error | tangential error | motion (no tracking) "
+        "| twist error (deg) | s / subject | s / frame |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for grid_name, tagged, shape, m in rows:
+        lines.append(
+            f"| {grid_name} | {'x'.join(map(str, shape))} | {'yes' if tagged else 'no'} | "
+            f"{m['normal']:.2f} | {m['tangential']:.2f} | {m['motion']:.2f} | {m['twist']:.2f} | "
+            f"{m['seconds']:.1f} | {m['seconds'] / n_frames:.2f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n-subjects", type=int, default=2)
+    parser.add_argument("--frames", type=int, default=25)
+    parser.add_argument(
+        "--grids", choices=("both", "short-axis", "isotropic"), default="both",
+        help="the grids to run (default both)",
+    )  # fmt: skip
+    parser.add_argument("--publish", action="store_true")
+    args = parser.parse_args(argv)
+    grids = [g for g in GRIDS if args.grids == "both" or g.startswith(args.grids)]
+    rows, es_frame = run(args.n_subjects, args.frames, grids=grids)
+    text = table(rows, args.n_subjects, args.frames, es_frame)
+    print(machine())
+    print(text)
+    if args.publish:
+        command = "python benchmarks/bench_cine_tracking.py"
+        command += f" --n-subjects {args.n_subjects} --frames {args.frames}"
+        command += f" --grids {args.grids} --publish"
+        print(publish("tracking_cine", text, command))
+
+
+if __name__ == "__main__":
+    main()

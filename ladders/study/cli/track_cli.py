@@ -1,0 +1,131 @@
+"""``symladders track``: corresponded ED meshes followed through their label series.
+
+A thin wrapper of :func:`~ladders.study.tracking.track_cohort`. Exit status 1 when a
+subject failed (the others are written, the reason is in ``tracking.csv`` and on
+standard error), 2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import csv
+import sys
+from pathlib import Path
+
+from .cli_types import (
+    DefaultsFormatter,
+    UsageError,
+    existing_folder,
+    jobs_count,
+    nonnegative_int,
+    output_folder,
+    positive_float,
+)
+
+__all__ = ["add_track_parser", "run_track_command"]
+
+_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
+
+
+def _read_planes(path: Path) -> dict:
+    """``{image: plane or {frame: plane}}`` from a CSV table, or a usage error naming the line."""
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+    except OSError as exc:
+        raise UsageError(f"symladders track: error: --cut-planes {path}: {exc.strerror}") from None
+    planes: dict = {}
+    for line, row in enumerate(rows, start=2):
+        try:
+            key = row["image"].strip()
+            plane = tuple(float(row[k]) for k in _COLUMNS)
+            frame = (row.get("frame") or "").strip()
+            frame = "all" if frame in ("", "all") else str(int(frame))
+        except (KeyError, TypeError, ValueError, AttributeError):
+            raise UsageError(
+                f"symladders track: error: --cut-planes {path}, line {line}: expected the columns "
+                "image,x,y,z,nx,ny,nz with numbers (and optionally frame, 0-based)"
+            ) from None
+        entry = planes.setdefault(key, {})
+        if frame in entry:
+            raise UsageError(
+                f"symladders track: error: --cut-planes {path}, line {line}: a second plane for "
+                f"{key!r} frame {frame}"
+            )
+        entry[frame] = plane
+    return planes
+
+
+def add_track_parser(sub) -> None:
+    """Register the ``track`` subcommand on an argparse subparsers object."""
+    p = sub.add_parser(
+        "track",
+        help="follow corresponded ED meshes through their label series (the whole cycle)",
+        description=(
+            "For every subject, follow its corresponded end-diastolic mesh <subject>_ed.<ext> "
+            "(MESHES, the output of 'symladders correspond') through its label series in IMAGES "
+            "(<subject>.nii.gz with the frames on the fourth axis, or a folder <subject>/ of 3-D "
+            "frames numbered frame_00, frame_01, ...; the first is ED). Every frame is meshed as "
+            "'symladders mesh' does and the mesh is moved from frame to frame onto it (affine "
+            "fit and normal projection, or an LDDMM registration); with --refine-ed every frame "
+            "is also reached from ED directly and the two results are combined (less drift). "
+            "OUTPUT holds <subject>/frame_<kk>.vtk (the atlas's faces), <subject>.json "
+            "(provenance and per-frame quality) and tracking.csv. A failing subject is recorded "
+            "with its reason and the others finish (exit 1); a rerun skips the subjects done "
+            "with the same inputs and settings."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    p.add_argument("meshes", type=existing_folder, metavar="MESHES",
+                   help="folder of corresponded meshes (<subject>_ed.<ext>)")  # fmt: skip
+    p.add_argument("images", type=existing_folder, metavar="IMAGES",
+                   help="folder of label series (4-D NIfTI or folders of frames)")  # fmt: skip
+    p.add_argument("--label", type=nonnegative_int, required=True, help="the structure's label")
+    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/tracked",
+                   help="folder of the tracked meshes")  # fmt: skip
+    p.add_argument("--method", choices=("projection", "registration"), default="projection",
+                   help="frame to frame: affine fit then normal projection, or LDDMM registration")  # fmt: skip
+    p.add_argument("--refine-ed", action="store_true",
+                   help="also move ED onto every frame directly and combine (limits the drift)")  # fmt: skip
+    p.add_argument("--crop-distance", type=positive_float, default=8.0,
+                   help="ignore the parts of a frame's surface farther than this (mm) from the "
+                        "mesh moved onto it (the lid at the valve plane); must exceed the motion "
+                        "between two frames")  # fmt: skip
+    p.add_argument("--vertices", type=nonnegative_int, default=2000,
+                   help="target vertex count of each frame's surface (0: no decimation)")  # fmt: skip
+    p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
+                   help="CSV with the columns image,x,y,z,nx,ny,nz[,frame]: the valve plane of a "
+                        "subject (image: its name or its series' file name), for one frame or, "
+                        "without a frame, for all")  # fmt: skip
+    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects tracked in parallel")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(run=run_track_command, output_is_file=False)
+
+
+def run_track_command(args) -> int:
+    """Track the subjects from parsed arguments."""
+    from ..imaging import MeshingSettings
+    from ..tracking import SeriesError, TrackingSettings, track_cohort
+
+    planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
+    args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
+    try:
+        settings = TrackingSettings(
+            method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
+            meshing=MeshingSettings(n_vertices=args.vertices or None),
+        )  # fmt: skip
+        outcome = track_cohort(args.meshes, args.images, args.output, args.label, settings,
+                               cut_planes=planes, jobs=args.jobs,
+                               progress=not args.no_progress)  # fmt: skip
+    except (SeriesError, ValueError) as exc:
+        raise UsageError(f"symladders track: error: {exc}") from None
+    counts = {
+        s: sum(r["status"] == s for r in outcome.records) for s in ("ok", "skipped", "failed")
+    }
+    print(
+        f"symladders track: {len(outcome.records)} subject(s): {counts['ok']} tracked, "
+        f"{counts['skipped']} already done, {counts['failed']} failed, in {outcome.output} "
+        "(tracking.csv)"
+    )
+    for r in outcome.failed:
+        print(f"symladders track: failed: {r['subject']}: {r['error']}", file=sys.stderr)
+    return 1 if outcome.failed else 0

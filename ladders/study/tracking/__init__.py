@@ -1,0 +1,44 @@
+"""Motion through the whole cardiac cycle: a corresponded ED mesh followed through a label series.
+
+- :mod:`.settings`: :class:`TrackingSettings` (method, ``refine_ed``, crop, meshing);
+- :mod:`.surface_tracking`: :func:`track_surfaces`, the mesh followed from frame to
+  frame through surfaces of any triangulation, with a quality per frame;
+- :mod:`.label_series`: a subject's 4-D label series or folder of frames, found and
+  checked (:func:`find_series`, :func:`open_series`, :class:`SeriesError`);
+- :mod:`.cohort_tracking`: :func:`track_cohort`, every subject of a folder of
+  corresponded meshes, resumable, with provenance (``symladders track``);
+- :mod:`.cine_tracking`: :func:`track_cine`, the ED mesh moved through cine intensity
+  images by B-spline registrations between consecutive frames (SimpleITK), composed
+  forward and backward through the cycle.
+
+See ``docs/tracking.md`` and ``docs/tracking_cine.md``.
+"""
+
+from .cine_tracking import CineTrackingSettings, image_from_array, register_frames, track_cine
+from .cohort_tracking import REPORT_FILE, TrackingOutcome, TrackingTask, plan_tracking, track_cohort
+from .label_series import LabelSeries, SeriesError, check_field_of_view, find_series, open_series
+from .settings import METHODS, TrackingSettings
+from .surface_tracking import TrackedSurfaces, combine_weight, crop_surface, track_surfaces
+
+__all__ = [
+    "CineTrackingSettings",
+    "image_from_array",
+    "register_frames",
+    "track_cine",
+    "METHODS",
+    "TrackingSettings",
+    "TrackedSurfaces",
+    "track_surfaces",
+    "combine_weight",
+    "crop_surface",
+    "LabelSeries",
+    "SeriesError",
+    "check_field_of_view",
+    "find_series",
+    "open_series",
+    "REPORT_FILE",
+    "TrackingOutcome",
+    "TrackingTask",
+    "plan_tracking",
+    "track_cohort",
+]

@@ -1,0 +1,441 @@
+"""Follow a mesh through cine intensity images by B-spline (FFD) image registration.
+
+The method of the UK Biobank motion pipeline (Bai et al., Nature Medicine 2020,
+``ukbb_cardiac``), with SimpleITK in place of MIRTK:
+
+1. every pair of consecutive frames is registered by a free-form deformation (a cubic
+   B-spline transform on a grid of control points ``control_point_spacing`` mm apart),
+   in both directions: ``k -> k + 1`` (forward) and ``k + 1 -> k`` (backward), the
+   cycle being periodic (frame ``n`` is frame 0, end-diastole, ED);
+2. the forward transforms are composed from ED to frame ``t``
+   (``0 -> 1 -> ... -> t``) and the backward ones from the next ED back to ``t``
+   (``n = 0 -> n - 1 -> ... -> t``); the composition is evaluated at the mesh's
+   points (each transform applied in turn), which is the exact composition at those
+   points;
+3. the two estimates of each ED point's position at ``t`` are averaged with weights by
+   the frame's position in the cycle, ``w_forward = 1 - t / n`` and
+   ``w_backward = t / n`` (``combine="both"``), so that each chain counts most where it
+   is short; ``combine="forward"`` keeps the forward chain only.
+
+Conventions
+-----------
+* An image is a numpy array ``(X, Y, Z)`` with a 4 x 4 affine from voxel indices
+  ``(i, j, k)`` to world millimetres (any orientation, spacing, flip or stack of thick
+  slices). The SimpleITK image is built with the same index order (``array[i, j, k]`` is
+  ITK index ``(i, j, k)``), origin ``affine[:3, 3]``, spacing the column norms of
+  ``affine[:3, :3]`` and direction those columns normalised, so that ITK's physical
+  space *is* the affine's world frame. ITK's own files use LPS and NIfTI's RAS; no
+  file is read or written here, so no axis is flipped: every point given and returned
+  is in the affine's world frame (RAS for a NIfTI affine, the synthetic ventricle's
+  frame for :func:`~ladders.study.imaging.render_cine`).
+* :func:`register_frames` ``(fixed, moving)`` returns the transform ``T`` that the
+  optimiser fitted so that ``moving(T(x)) ~ fixed(x)``: ``T`` maps a point ``x`` of the
+  fixed frame to the point of the moving frame showing the same material, i.e. it
+  moves points *forward from the fixed frame to the moving frame*. Tracking from frame
+  ``k`` to ``k + 1`` therefore registers ``fixed = frame k``, ``moving = frame k + 1``.
+* Deterministic given the settings: the metric samples its voxels at random with a
+  fixed ``seed`` (or uses every voxel with ``sampling_percentage=None``), and the
+  registration runs on ``threads`` threads (1 by default; the result is reproducible
+  for a fixed thread count).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["CineTrackingSettings", "register_frames", "track_cine", "image_from_array"]
+
+_METRICS = ("mean_squares", "mattes")
+_OPTIMIZERS = ("lbfgsb", "gradient_descent")
+_COMBINE = ("both", "forward")
+
+
+def _sitk():
+    try:
+        import SimpleITK as sitk
+    except ImportError as error:  # pragma: no cover - a declared dependency
+        raise ImportError("cine tracking needs SimpleITK: pip install 'SimpleITK>=2.3'") from error
+    return sitk
+
+
+@dataclass(frozen=True)
+class CineTrackingSettings:
+    """Settings of the frame-to-frame B-spline registrations and their combination.
+
+    Attributes
+    ----------
+    control_point_spacing : float, default 10.0
+        Distance between the B-spline control points, mm (the FFD's only
+        regularisation: a coarser grid gives a smoother deformation).
+    metric : {"mean_squares", "mattes"}, default "mean_squares"
+        Mean squared intensity difference (consecutive cine frames share their
+        intensities) or Mattes mutual information (``histogram_bins`` bins).
+    histogram_bins : int, default 32
+    optimizer : {"lbfgsb", "gradient_descent"}, default "lbfgsb"
+    iterations : int, default 30
+        Iterations per resolution level.
+    shrink_factors : tuple of int, default (2, 1)
+        Down-sampling of the images per level, coarse to fine.
+    smoothing_sigmas : tuple of float, default (2.0, 0.0)
+        Gaussian smoothing per level, mm.
+    sampling_percentage : float or None, default 0.05
+        Fraction in ``(0, 1]`` of the voxels the metric samples at random (with
+        ``seed``, the same samples at every run); None uses every voxel. ITK evaluates
+        a B-spline transform's derivative densely (every sample touches every
+        parameter), so the cost of an iteration is about samples x control points:
+        every voxel with a fine grid is slow.
+    seed : int, default 0
+        Seed of the metric's random sampling (given to ITK as ``seed + 1``: ITK reads 0
+        as "seed from the wall clock").
+    combine : {"both", "forward"}, default "both"
+        Average the forward and backward chains (UK Biobank) or keep the forward one.
+    threads : int, default 1
+        Threads of each registration (1: bit-for-bit reproducible).
+    """
+
+    control_point_spacing: float = 10.0
+    metric: str = "mean_squares"
+    histogram_bins: int = 32
+    optimizer: str = "lbfgsb"
+    iterations: int = 30
+    shrink_factors: tuple = (2, 1)
+    smoothing_sigmas: tuple = (2.0, 0.0)
+    sampling_percentage: float | None = 0.05
+    seed: int = 0
+    combine: str = "both"
+    threads: int = 1
+
+    def __post_init__(self):
+        cps = self.control_point_spacing
+        if (
+            isinstance(cps, bool)
+            or not isinstance(cps, (int, float, np.number))
+            or not (np.isfinite(cps) and cps > 0)
+        ):
+            raise ValueError(f"control_point_spacing: expected a length > 0 mm, got {cps!r}")
+        if self.metric not in _METRICS:
+            raise ValueError(f"metric: expected one of {_METRICS}, got {self.metric!r}")
+        if self.optimizer not in _OPTIMIZERS:
+            raise ValueError(f"optimizer: expected one of {_OPTIMIZERS}, got {self.optimizer!r}")
+        if self.combine not in _COMBINE:
+            raise ValueError(f"combine: expected one of {_COMBINE}, got {self.combine!r}")
+        for name in ("histogram_bins", "iterations", "threads"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
+        if (
+            isinstance(self.seed, bool)
+            or not isinstance(self.seed, (int, np.integer))
+            or not (0 <= self.seed < 2**31 - 1)
+        ):
+            raise ValueError(f"seed: expected an integer in [0, 2^31 - 1), got {self.seed!r}")
+        shrink, sigmas = tuple(self.shrink_factors), tuple(self.smoothing_sigmas)
+        if not shrink or any(
+            isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 1 for s in shrink
+        ):
+            raise ValueError(
+                f"shrink_factors: expected integers >= 1, one per level, got {self.shrink_factors!r}"
+            )
+        if len(sigmas) != len(shrink) or any(
+            not (np.isfinite(float(s)) and float(s) >= 0) for s in sigmas
+        ):
+            raise ValueError(
+                f"smoothing_sigmas: expected {len(shrink)} numbers >= 0 mm (one per shrink "
+                f"factor), got {self.smoothing_sigmas!r}"
+            )
+        p = self.sampling_percentage
+        if p is not None and (
+            isinstance(p, bool) or not isinstance(p, (int, float, np.number))
+            or not (0 < p <= 1)
+        ):  # fmt: skip
+            raise ValueError(
+                f"sampling_percentage: expected None or a fraction in (0, 1], got {p!r}"
+            )
+        object.__setattr__(self, "shrink_factors", tuple(int(s) for s in shrink))
+        object.__setattr__(self, "smoothing_sigmas", tuple(float(s) for s in sigmas))
+
+
+def _check_affine(affine, name: str = "affine") -> np.ndarray:
+    try:
+        a = np.asarray(affine, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a 4 x 4 matrix of numbers") from None
+    if a.shape != (4, 4):
+        raise ValueError(f"{name}: expected a 4 x 4 matrix, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"{name}: NaN or infinite entries")
+    if not np.allclose(a[3], [0.0, 0.0, 0.0, 1.0]):
+        raise ValueError(f"{name}: the last row must be (0, 0, 0, 1), got {a[3].tolist()}")
+    if abs(np.linalg.det(a[:3, :3])) < 1e-9 * max(1.0, np.abs(a[:3, :3]).max() ** 3):
+        raise ValueError(f"{name}: singular (voxels of zero size)")
+    return a
+
+
+def _check_volume(volume, name: str) -> np.ndarray:
+    try:
+        v = np.asarray(volume, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a 3-D array of intensities") from None
+    if v.ndim != 3:
+        raise ValueError(f"{name}: expected a 3-D array (X, Y, Z), got shape {v.shape}")
+    if min(v.shape) < 2:
+        raise ValueError(f"{name}: every axis needs at least 2 voxels, got shape {v.shape}")
+    if not np.isfinite(v).all():
+        raise ValueError(f"{name}: NaN or infinite intensities")
+    return v
+
+
+def image_from_array(volume, affine):
+    """A SimpleITK image of ``volume`` (X, Y, Z) whose physical space is the affine's world.
+
+    ITK index ``(i, j, k)`` is ``volume[i, j, k]``; origin ``affine[:3, 3]``, spacing the
+    column norms of ``affine[:3, :3]``, direction the normalised columns (no LPS/RAS
+    flip: see the module's conventions).
+    """
+    sitk = _sitk()
+    a = _check_affine(affine)
+    v = _check_volume(volume, "volume")
+    matrix = a[:3, :3]
+    spacing = np.linalg.norm(matrix, axis=0)
+    image = sitk.GetImageFromArray(np.ascontiguousarray(v.transpose(2, 1, 0), dtype=np.float32))
+    image.SetSpacing(spacing.tolist())
+    image.SetDirection((matrix / spacing).ravel().tolist())
+    image.SetOrigin(a[:3, 3].tolist())
+    return image
+
+
+def _grid_affine(spacing) -> np.ndarray:
+    """The affine from ``spacing``: a 4 x 4 affine, or 3 voxel sizes (origin 0, axes aligned)."""
+    try:
+        s = np.asarray(spacing, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("spacing: expected 3 voxel sizes in mm or a 4 x 4 affine") from None
+    if s.shape == (4, 4):
+        return _check_affine(s, "spacing")
+    if s.shape == (3,):
+        if not (np.isfinite(s).all() and (s > 0).all()):
+            raise ValueError(f"spacing: expected 3 voxel sizes > 0 mm, got {s.tolist()}")
+        a = np.eye(4)
+        a[:3, :3] = np.diag(s)
+        return a
+    raise ValueError(
+        f"spacing: expected 3 voxel sizes in mm or a 4 x 4 affine, got shape {s.shape}"
+    )
+
+
+def _register(fixed_image, moving_image, settings: CineTrackingSettings):
+    sitk = _sitk()
+    size = np.asarray(fixed_image.GetSize(), dtype=float)
+    extent = (size - 1.0) * np.asarray(fixed_image.GetSpacing())
+    mesh = [max(1, int(round(e / settings.control_point_spacing))) for e in extent]
+    transform = sitk.BSplineTransformInitializer(fixed_image, mesh, 3)
+    method = sitk.ImageRegistrationMethod()
+    if settings.metric == "mean_squares":
+        method.SetMetricAsMeanSquares()
+    else:
+        method.SetMetricAsMattesMutualInformation(numberOfHistogramBins=settings.histogram_bins)
+    if settings.sampling_percentage is None:
+        method.SetMetricSamplingStrategy(method.NONE)
+    else:
+        method.SetMetricSamplingStrategy(method.RANDOM)
+        # SimpleITK reads a seed of 0 as "seed from the wall clock": shift by one
+        method.SetMetricSamplingPercentage(
+            float(settings.sampling_percentage), int(settings.seed) + 1
+        )
+    method.SetInterpolator(sitk.sitkLinear)
+    if settings.optimizer == "lbfgsb":
+        method.SetOptimizerAsLBFGSB(
+            gradientConvergenceTolerance=1e-6,
+            numberOfIterations=settings.iterations,
+            maximumNumberOfCorrections=7,
+            maximumNumberOfFunctionEvaluations=4 * settings.iterations,
+            costFunctionConvergenceFactor=1e7,
+        )
+    else:
+        method.SetOptimizerAsGradientDescent(
+            learningRate=1.0,
+            numberOfIterations=settings.iterations,
+            convergenceMinimumValue=1e-7,
+            convergenceWindowSize=10,
+            estimateLearningRate=method.EachIteration,
+        )
+        method.SetOptimizerScalesFromPhysicalShift()
+    levels = len(settings.shrink_factors)
+    # a level may not shrink an axis below 4 voxels (short-axis stacks have few slices)
+    smallest = int(size.min())
+    shrink = [max(1, min(s, smallest // 4)) for s in settings.shrink_factors]
+    method.SetShrinkFactorsPerLevel(shrink)
+    method.SetSmoothingSigmasPerLevel(list(settings.smoothing_sigmas[:levels]))
+    method.SmoothingSigmasAreSpecifiedInPhysicalUnitsOn()
+    method.SetInitialTransform(transform, inPlace=True)
+    method.SetNumberOfThreads(int(settings.threads))
+    method.Execute(fixed_image, moving_image)
+    return transform
+
+
+def register_frames(fixed, moving, spacing, settings: CineTrackingSettings | None = None):
+    """B-spline (FFD) registration of two frames: the transform from fixed to moving points.
+
+    Parameters
+    ----------
+    fixed, moving : array (X, Y, Z)
+        Intensities of two frames on the same grid.
+    spacing : 3 floats or array (4, 4)
+        The grid: voxel sizes in mm (axes aligned, origin 0) or the voxel-to-world affine.
+    settings : CineTrackingSettings, optional
+
+    Returns
+    -------
+    SimpleITK.BSplineTransform
+        ``T`` with ``moving(T(x)) ~ fixed(x)``: ``T.TransformPoint(x)`` maps a world point
+        ``x`` of the fixed frame to the same material point in the moving frame (points
+        move forward from ``fixed`` to ``moving``). Its domain is the fixed image's
+        extent; outside it ``T`` is the identity.
+
+    Raises
+    ------
+    ValueError
+        Naming ``fixed``, ``moving``, ``spacing`` or ``settings``.
+    """
+    settings = _check_settings(settings)
+    a = _grid_affine(spacing)
+    f = _check_volume(fixed, "fixed")
+    m = _check_volume(moving, "moving")
+    if f.shape != m.shape:
+        raise ValueError(f"moving: shape {m.shape} differs from fixed's {f.shape}")
+    return _register(image_from_array(f, a), image_from_array(m, a), settings)
+
+
+def _check_settings(settings) -> CineTrackingSettings:
+    if settings is None:
+        return CineTrackingSettings()
+    if not isinstance(settings, CineTrackingSettings):
+        raise ValueError(
+            f"settings: expected CineTrackingSettings or None, got {type(settings).__name__}"
+        )
+    return settings
+
+
+def _check_series(series) -> np.ndarray:
+    try:
+        s = np.asarray(series, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(
+            "series: expected a 4-D array (n_frames, X, Y, Z) of intensities"
+        ) from None
+    if s.ndim != 4:
+        raise ValueError(f"series: expected a 4-D array (n_frames, X, Y, Z), got shape {s.shape}")
+    if s.shape[0] < 2:
+        raise ValueError(f"series: expected at least 2 frames, got {s.shape[0]}")
+    if min(s.shape[1:]) < 2:
+        raise ValueError(f"series: every spatial axis needs at least 2 voxels, got {s.shape}")
+    if not np.isfinite(s).all():
+        raise ValueError("series: NaN or infinite intensities")
+    return s
+
+
+def _check_vertices(vertices, affine, shape) -> np.ndarray:
+    try:
+        v = np.asarray(vertices, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError("ed_vertices: expected an array (k, 3) of points in mm") from None
+    if v.ndim != 2 or v.shape[1] != 3 or len(v) == 0:
+        raise ValueError(f"ed_vertices: expected shape (k, 3) with k >= 1, got {v.shape}")
+    if not np.isfinite(v).all():
+        raise ValueError("ed_vertices: NaN or infinite coordinates")
+    index = (v - affine[:3, 3]) @ np.linalg.inv(affine[:3, :3]).T
+    outside = np.any((index < -0.5) | (index > np.asarray(shape) - 0.5), axis=1)
+    if outside.any():
+        first = int(np.argmax(outside))
+        raise ValueError(
+            f"ed_vertices: {int(outside.sum())} of {len(v)} points lie outside the image's "
+            f"field of view (e.g. vertex {first} at {v[first].round(2).tolist()} mm, voxel "
+            f"index {index[first].round(2).tolist()}, image shape {tuple(shape)})"
+        )
+    return v
+
+
+def _check_es_frame(es_frame, n: int):
+    if es_frame is None:
+        return None
+    ok = isinstance(es_frame, (int, np.integer)) and not isinstance(es_frame, bool)
+    if not ok or not 1 <= es_frame <= n - 1:
+        raise ValueError(
+            f"es_frame: expected None or a frame index in [1, {n - 1}], got {es_frame!r}"
+        )
+    return int(es_frame)
+
+
+def _forward_weights(n: int, es_frame: int | None) -> np.ndarray:
+    """Weight of the forward chain at each frame (the backward one has ``1 - w``)."""
+    t = np.arange(n, dtype=float)
+    if es_frame is None:
+        return 1.0 - t / n
+    # piecewise linear through 1/2 at ES: the chains count equally at end-systole
+    return np.where(t <= es_frame, 1.0 - 0.5 * t / es_frame, 0.5 * (n - t) / (n - es_frame))
+
+
+def _move(transform, points: np.ndarray) -> np.ndarray:
+    return np.array([transform.TransformPoint(tuple(map(float, p))) for p in points])
+
+
+def track_cine(
+    series,
+    affine,
+    ed_vertices,
+    settings: CineTrackingSettings | None = None,
+    es_frame: int | None = None,
+) -> np.ndarray:
+    """Move the ED mesh through every frame of a cine series by FFD registration.
+
+    Parameters
+    ----------
+    series : array (n_frames, X, Y, Z)
+        Intensities of one cardiac cycle, frame 0 at end-diastole (ED); the cycle is
+        periodic (the frame after the last is frame 0).
+    affine : array (4, 4)
+        Voxel indices ``(i, j, k)`` to world mm, shared by the frames.
+    ed_vertices : array (k, 3)
+        The mesh at ED, world mm, inside the image's field of view.
+    settings : CineTrackingSettings, optional
+    es_frame : int, optional
+        The end-systolic frame. None (default): the UK Biobank weights
+        ``w_forward = 1 - t / n``. Given: piecewise-linear weights from 1 at ED through
+        1/2 at ``es_frame`` to 0 at the next ED, so that both chains count equally at ES.
+        Ignored with ``combine="forward"``.
+
+    Returns
+    -------
+    ndarray of float64, shape (n_frames, k, 3)
+        The vertices at every frame, world mm (frame 0 is ``ed_vertices``).
+
+    Raises
+    ------
+    ValueError
+        Naming ``series``, ``affine``, ``ed_vertices``, ``settings`` or ``es_frame``.
+    """
+    settings = _check_settings(settings)
+    s = _check_series(series)
+    a = _check_affine(affine)
+    n = s.shape[0]
+    v = _check_vertices(ed_vertices, a, s.shape[1:])
+    es = _check_es_frame(es_frame, n)
+    images = [image_from_array(frame, a) for frame in s]
+
+    forward = np.empty((n, len(v), 3))
+    forward[0] = v
+    for t in range(1, n):  # fixed frame t - 1, moving frame t: points move t - 1 -> t
+        forward[t] = _move(_register(images[t - 1], images[t], settings), forward[t - 1])
+    if settings.combine == "forward":
+        return forward
+
+    backward = np.empty_like(forward)
+    backward[0] = v
+    current = v
+    for t in range(n - 1, 0, -1):  # fixed frame t + 1 (mod n), moving frame t: t + 1 -> t
+        current = _move(_register(images[(t + 1) % n], images[t], settings), current)
+        backward[t] = current
+    w = _forward_weights(n, es)[:, None, None]
+    return w * forward + (1.0 - w) * backward

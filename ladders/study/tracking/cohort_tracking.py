@@ -1,0 +1,344 @@
+"""Track every subject of a folder of corresponded meshes through its label series: batch, resumable.
+
+:func:`track_cohort` pairs each corresponded end-diastolic mesh
+``<subject>_ed.<ext>`` of a folder ``symladders correspond`` wrote with the
+subject's label series in a folder of images (:func:`~.label_series.find_series`:
+``<subject>.nii.gz``, 4-D, or a folder ``<subject>/`` of frames), meshes every frame
+of the series as ``symladders mesh`` does
+(:func:`~ladders.study.imaging.surface_extraction.extract_surface`, with the
+subject's valve cut plane where one is given, per frame or for all frames), tracks
+the mesh through the frames (:func:`~.surface_tracking.track_surfaces`) and writes::
+
+    <output>/<subject>/frame_<kk>.vtk   the tracked mesh of every frame (the atlas's faces)
+    <output>/<subject>.json             provenance: inputs' SHA-256, frames, settings,
+                                         per-frame quality and meshing, versions
+    <output>/tracking.csv               one row per subject: status, frames, reason
+
+The corresponded meshes are in the atlas's frame: where the folder holds the
+subject's record ``correspondence/<subject>.json`` (as ``symladders correspond``
+writes it), its transform brings the ED mesh back into the images' world frame
+before tracking, and the tracked frames are written in the atlas's frame again (so
+that ``frame_00`` is the corresponded ED). Without a record the meshes are taken
+to be in the images' world frame.
+
+Every file is written atomically and a subject's record last; a rerun skips the
+subjects whose record matches their inputs (the ED mesh's and the series' bytes, the
+transform, the label, the settings and the cut planes). A subject that fails (no
+series, a bad series, an ED mesh outside the images, the label absent in a frame, a
+surface the mesh cannot follow) is recorded with its reason and the others go on.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..batch import run_batch
+from ..cohort.mesh_folder import natural_key
+from ..files import atomic_write_text, file_sha256
+from ..imaging.surface_extraction import MeshingSettings, extract_surface
+from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
+from ..preparation.alignment import SimilarityTransform
+from .label_series import SeriesError, check_field_of_view, find_series, open_series
+from .settings import TrackingSettings
+from .surface_tracking import track_surfaces
+
+__all__ = ["TrackingTask", "TrackingOutcome", "plan_tracking", "track_cohort", "REPORT_FILE"]
+
+#: The batch's table of subjects, written into the output folder.
+REPORT_FILE = "tracking.csv"
+_RECORDS = "correspondence"
+
+
+@dataclass(frozen=True)
+class TrackingTask:
+    """One subject to track: its ED mesh, its correspondence transform, its series."""
+
+    subject: str
+    ed: Path | None
+    transform: dict | None
+    series: Path | None
+    error: str = ""
+
+
+@dataclass
+class TrackingOutcome:
+    """What :func:`track_cohort` did: one row per subject, in natural order.
+
+    Attributes
+    ----------
+    output : Path
+    records : list of dict
+        ``subject``, ``status`` (ok, skipped, failed), ``frames``, ``mean_distance``
+        (largest over the frames, mm), ``error``.
+    """
+
+    output: Path
+    records: list = field(default_factory=list)
+
+    @property
+    def failed(self) -> list:
+        """The rows of the subjects that could not be tracked."""
+        return [r for r in self.records if r["status"] == "failed"]
+
+
+def _ed_meshes(folder: Path) -> dict[str, Path]:
+    if not folder.is_dir():
+        raise SeriesError(f"meshes: {folder} is not a folder")
+    out: dict[str, Path] = {}
+    for path in sorted(folder.iterdir()):
+        if (
+            path.name.startswith(".")
+            or not path.is_file()
+            or path.suffix.lower() not in MESH_EXTENSIONS
+        ):
+            continue
+        if path.stem.lower().endswith("_ed"):
+            subject = path.stem[:-3]
+            if subject in out:
+                raise SeriesError(
+                    f"meshes: subject {subject!r} has two ED meshes, {out[subject]} and {path}"
+                )
+            out[subject] = path
+    if not out:
+        raise SeriesError(f"meshes: {folder} holds no '<subject>_ed.<ext>' mesh")
+    return out
+
+
+def _transform(folder: Path, subject: str) -> dict | None:
+    path = folder / _RECORDS / f"{subject}.json"
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    transform = record.get("transform") if isinstance(record, dict) else None
+    return transform if isinstance(transform, dict) and "matrix" in transform else None
+
+
+def plan_tracking(meshes_folder, images) -> list[TrackingTask]:
+    """The subjects to track (every ED mesh and every series), with the errors known beforehand."""
+    folder = Path(meshes_folder)
+    meshes = _ed_meshes(folder)
+    series = find_series(images)
+    tasks = []
+    for subject in sorted(set(meshes) | set(series), key=natural_key):
+        ed, source = meshes.get(subject), series.get(subject)
+        error = ""
+        if ed is None:
+            error = f"subject {subject!r}: no ED mesh '{subject}_ed.<ext>' in {folder}"
+        elif source is None:
+            error = (f"subject {subject!r}: no label series ({subject}.nii.gz, or a folder "
+                     f"{subject}/ of frames) among the images")  # fmt: skip
+        elif isinstance(source, str):
+            error, source = source, None
+        tasks.append(TrackingTask(subject, ed, _transform(folder, subject) if ed else None,
+                                  source, error))  # fmt: skip
+    return tasks
+
+
+def _planes_of(task: TrackingTask, cut_planes: dict | None) -> dict | None:
+    """``{frame or "all": plane}`` of a subject (keyed by subject or series file name)."""
+    if not cut_planes:
+        return None
+    keys = [task.subject] + ([task.series.name, str(task.series)] if task.series else [])
+    entry = next((cut_planes[k] for k in keys if k in cut_planes), None)
+    if entry is None:
+        return None
+    if isinstance(entry, dict):
+        return {str(k): [float(x) for x in v] for k, v in entry.items()}
+    return {"all": [float(x) for x in entry]}
+
+
+def _frame_settings(meshing: MeshingSettings, planes: dict | None, frame: int) -> MeshingSettings:
+    if not planes:
+        return meshing
+    plane = planes.get(str(frame), planes.get("all"))
+    if plane is None:
+        return meshing
+    return MeshingSettings(**{**meshing.as_dict(), "cut_plane": tuple(plane)})
+
+
+def _series_hashes(source: Path) -> list[str]:
+    files = sorted(p for p in source.iterdir() if p.is_file()) if source.is_dir() else [source]
+    return [file_sha256(p) for p in files]
+
+
+def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, planes) -> dict:
+    return {
+        "ed_sha256": file_sha256(task.ed),
+        "series_sha256": _series_hashes(task.series),
+        "transform": task.transform,
+        "label": int(label),
+        "settings": settings.key(),
+        "cut_planes": planes,
+    }
+
+
+def _frame_name(t: int, n: int, ext: str) -> str:
+    return f"frame_{t:0{max(2, len(str(n - 1)))}d}{ext}"
+
+
+def _row(task: TrackingTask, status: str, **extra) -> dict:
+    return {"subject": task.subject, "status": status, "frames": extra.get("frames", ""),
+            "mean_distance": extra.get("mean_distance", ""), "error": extra.get("error", "")}  # fmt: skip
+
+
+def _done(task: TrackingTask, output: Path, label: int, settings, planes, ext: str) -> dict | None:
+    """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of a subject tracked before."""
+    if task.error:
+        return None
+    try:
+        record = json.loads((output / f"{task.subject}.json").read_text(encoding="utf-8"))
+        fingerprint = _fingerprint(task, label, settings, planes)
+    except (OSError, ValueError):
+        return None
+    if not isinstance(record, dict) or record.get("status") != "ok":
+        return None
+    if record.get("fingerprint") != fingerprint:
+        return None
+    n = int(record.get("n_frames", 0))
+    if n < 1 or not all(
+        (output / task.subject / _frame_name(t, n, ext)).is_file() for t in range(n)
+    ):
+        return None
+    return _row(task, "skipped", frames=n, mean_distance=record.get("max_mean_distance", ""))
+
+
+def _clear(output: Path, subject: str, ext: str) -> None:
+    folder = output / subject
+    if folder.is_dir():
+        for path in folder.glob(f"frame_*{ext}"):
+            path.unlink(missing_ok=True)
+
+
+def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingSettings,
+               planes, ext: str) -> dict:  # fmt: skip
+    record: dict = {"subject": task.subject, "status": "failed"}
+    try:
+        if task.error:
+            raise SeriesError(task.error)
+        record["fingerprint"] = _fingerprint(task, label, settings, planes)
+        series = open_series(task.series)
+        vertices, faces = read_mesh(task.ed)
+        transform = (
+            None if task.transform is None else SimilarityTransform.from_dict(task.transform)
+        )
+        scanner = vertices if transform is None else transform.inverse().apply(vertices)
+        check_field_of_view(scanner, series, f"{task.ed}")
+        surfaces, reports = [], []
+        for t in range(series.n_frames):
+            v, f, report = extract_surface(
+                series.frame(t), label, _frame_settings(settings.meshing, planes, t)
+            )
+            surfaces.append((v, f))
+            reports.append(report.as_dict())
+        tracked = track_surfaces(scanner, faces, surfaces, settings)
+        _clear(output, task.subject, ext)
+        for t in range(series.n_frames):
+            frame = (
+                tracked.vertices[t] if transform is None else transform.apply(tracked.vertices[t])
+            )
+            write_mesh(output / task.subject / _frame_name(t, series.n_frames, ext), frame, faces,
+                       atomic=True)  # fmt: skip
+        worst = max(q["mean_distance"] for q in tracked.quality)
+        record.update(
+            status="ok", ed_mesh=str(task.ed.resolve()), series=[str(p.resolve()) for p in series.files],
+            n_frames=series.n_frames, label=int(label), frame="atlas" if transform else "images",
+            affine=series.affine.tolist(), spacing_mm=np.linalg.norm(series.affine[:3, :3], axis=0).tolist(),
+            settings=settings.as_dict(), cut_planes=planes, quality=tracked.quality,
+            surfaces=reports, max_mean_distance=worst, versions=_versions(),
+        )  # fmt: skip
+        row = _row(task, "ok", frames=series.n_frames, mean_distance=worst)
+    except Exception as exc:  # noqa: BLE001 - a failing subject must not stop the others
+        reason = (
+            str(exc)
+            if isinstance(exc, SeriesError | ValueError | OSError)
+            else (f"{type(exc).__name__}: {exc}")
+        )
+        record.update(reason=reason, traceback=traceback.format_exc())
+        _clear(output, task.subject, ext)
+        row = _row(task, "failed", error=reason)
+    atomic_write_text(output / f"{task.subject}.json", json.dumps(record, indent=1, default=float))
+    return row
+
+
+def _versions() -> dict:
+    from ..running.provenance import package_versions
+
+    return package_versions()
+
+
+def _report_csv(rows: list) -> str:
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=["subject", "status", "frames", "mean_distance", "error"],
+                            lineterminator="\n", extrasaction="ignore")  # fmt: skip
+    writer.writeheader()
+    writer.writerows(rows)
+    return buf.getvalue()
+
+
+def track_cohort(
+    meshes_folder,
+    images,
+    output,
+    label: int,
+    settings: TrackingSettings | None = None,
+    cut_planes: dict | None = None,
+    jobs: int = 2,
+    progress: bool = True,
+    ext: str = ".vtk",
+) -> TrackingOutcome:
+    """Track every subject's corresponded ED mesh through its label series (see the module).
+
+    Parameters
+    ----------
+    meshes_folder : path
+        A folder of ``<subject>_ed.<ext>`` meshes in the atlas's correspondence (the
+        output of ``symladders correspond``, with its ``correspondence/`` records).
+    images : path or iterable of paths
+        A folder of label series (4-D ``<subject>.nii.gz`` or folders of frames).
+    output : path
+        The folder written (created).
+    label : int
+        The label meshed (e.g. the left-ventricle cavity).
+    settings : TrackingSettings, optional
+        With the meshing settings of the frames (``settings.meshing``).
+    cut_planes : dict, optional
+        ``{subject or series file name: plane}`` with ``plane`` ``(x, y, z, nx, ny, nz)``
+        in world mm for every frame, or ``{frame: plane}`` per frame (0-based; a key
+        ``"all"`` for the others).
+    jobs : int, default 2
+        Subjects tracked in parallel (joblib processes).
+    progress : bool
+        A progress bar over the subjects (tqdm).
+    ext : str, default ".vtk"
+        Format of the tracked meshes.
+
+    Returns
+    -------
+    TrackingOutcome
+    """
+    settings = settings or TrackingSettings()
+    if isinstance(label, bool) or not isinstance(label, int | np.integer):
+        raise ValueError(f"label: expected an int, got {label!r}")
+    ext = "." + ext.lower().lstrip(".")
+    output = Path(output)
+    tasks = plan_tracking(meshes_folder, images)
+    output.mkdir(parents=True, exist_ok=True)
+    jobs_args = [(t, output, int(label), settings, _planes_of(t, cut_planes), ext) for t in tasks]
+    rows = []
+    try:
+        for row in run_batch(_track_one, jobs_args, jobs=jobs, progress=bool(progress),
+                             desc="subjects", unit="subject", reuse=_done):  # fmt: skip
+            rows.append(row)
+    finally:
+        order = {t.subject: i for i, t in enumerate(tasks)}
+        rows.sort(key=lambda r: order[r["subject"]])
+        atomic_write_text(output / REPORT_FILE, _report_csv(rows))
+    return TrackingOutcome(output, rows)

@@ -1,0 +1,107 @@
+"""Settings of the tracking of a corresponded end-diastolic mesh through a cardiac cycle."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from manifolds.validation import check_float, check_int
+
+from ..imaging.surface_extraction import MeshingSettings
+from ..preparation.correspondence import CorrespondenceSettings
+
+__all__ = ["TrackingSettings", "METHODS"]
+
+#: How a frame's mesh is moved onto the frame's surface.
+METHODS = ("projection", "registration")
+
+
+def _default_correspondence() -> CorrespondenceSettings:
+    # no rigid re-alignment between frames (one scanner frame), no final Procrustes
+    return CorrespondenceSettings(alignment="none", final_procrustes=False)
+
+
+@dataclass(frozen=True)
+class TrackingSettings:
+    """How :func:`~.surface_tracking.track_surfaces` follows a mesh (lengths in mm).
+
+    Attributes
+    ----------
+    method : {"projection", "registration"}
+        ``"projection"``: the previous frame's mesh is moved by its affine fit onto the
+        frame's surface (:func:`~ladders.study.preparation.affine.affine_icp`), then
+        each vertex along its normal onto that surface, as
+        :func:`~ladders.study.preparation.correspondence.project_mesh` does;
+        ``"registration"``: the previous frame's mesh is registered onto the frame's
+        surface (LDDMM with a varifold term, as
+        :func:`~ladders.study.preparation.correspondence.correspond_mesh` does, with
+        the transform fixed to the identity: the frames share the scanner frame).
+    refine_ed : bool
+        Also move the ED mesh onto every frame directly and combine the two results
+        (:func:`~.surface_tracking.combine_weight`): limits the drift of the chain.
+    crop_distance : float or None
+        Triangles of a frame's surface farther than this (mm) from the mesh that is
+        moved onto it are left out (the lid that closes a label at the valve plane,
+        other structures); it must exceed the motion between two frames. None: the
+        whole surface.
+    affine_iterations : int
+        At most this many steps of the affine fit per frame.
+    affine_tol : float
+        The affine fit stops when its matrix changes by less than this (relative).
+    normal_max_distance : float or None
+        Farthest normal motion looked for (default a fifth of the surface's extent).
+    correspondence : CorrespondenceSettings
+        The registration of ``method="registration"`` (its ``alignment`` is ``"none"``,
+        its ``final_procrustes`` False).
+    meshing : MeshingSettings
+        How :func:`~.cohort_tracking.track_cohort` meshes each frame of a label series
+        (:func:`~ladders.study.imaging.surface_extraction.extract_surface`).
+    """
+
+    method: str = "projection"
+    refine_ed: bool = False
+    crop_distance: float | None = 8.0
+    affine_iterations: int = 15
+    affine_tol: float = 1e-3
+    normal_max_distance: float | None = None
+    correspondence: CorrespondenceSettings = field(default_factory=_default_correspondence)
+    meshing: MeshingSettings = field(default_factory=MeshingSettings)
+
+    def __post_init__(self):
+        name = "TrackingSettings"
+        if self.method not in METHODS:
+            raise ValueError(f"{name}: method: expected one of {METHODS}, got {self.method!r}")
+        if not isinstance(self.refine_ed, bool | np.bool_):
+            raise ValueError(f"{name}: refine_ed: expected True or False, got {self.refine_ed!r}")
+        for key in ("crop_distance", "normal_max_distance"):
+            if getattr(self, key) is not None:
+                check_float(getattr(self, key), f"{name}: {key}", minimum=0.0, strict=True)
+        check_int(self.affine_iterations, f"{name}: affine_iterations", minimum=1)
+        check_float(self.affine_tol, f"{name}: affine_tol", minimum=0.0, strict=True)
+        if not isinstance(self.correspondence, CorrespondenceSettings):
+            raise TypeError(f"{name}: correspondence: expected CorrespondenceSettings")
+        if not isinstance(self.meshing, MeshingSettings):
+            raise TypeError(f"{name}: meshing: expected MeshingSettings")
+
+    def replace(self, **changes) -> TrackingSettings:
+        """A copy with ``changes``."""
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self) -> dict:
+        """JSON-ready fields (the nested settings as dicts)."""
+        out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        out["refine_ed"] = bool(self.refine_ed)
+        out["correspondence"] = self.correspondence.as_dict()
+        out["meshing"] = self.meshing.as_dict()
+        return out
+
+    def key(self) -> str:
+        """Stable hash of every setting (what a stored result depends on)."""
+        payload = self.as_dict()
+        payload["correspondence"] = self.correspondence.key()
+        text = json.dumps(payload, sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]

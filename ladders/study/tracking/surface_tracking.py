@@ -1,0 +1,262 @@
+"""Follow a corresponded end-diastolic mesh through the frames of a cardiac cycle.
+
+:func:`track_surfaces` takes a mesh in the atlas's vertex correspondence at
+end-diastole (frame 0, e.g. the output of ``symladders correspond``) and the surface
+of every frame (any triangulation, one scanner frame, mm), and moves the mesh from
+frame to frame: frame ``t``'s mesh starts from frame ``t - 1``'s result and is moved
+onto frame ``t``'s surface, either by its affine fit followed by a projection of
+every vertex along its normal (``method="projection"``, as
+:func:`~ladders.study.preparation.correspondence.project_mesh`: the global change of
+shape is carried by the affine part, the regional motion across the wall by the
+normal part, and no regional motion along the wall is invented), or by an LDDMM
+registration with a varifold data term (``method="registration"``, as
+:func:`~ladders.study.preparation.correspondence.correspond_mesh`, with the
+transform fixed to the identity). Before each step the frame's surface is cropped
+to the triangles within ``crop_distance`` of the moving mesh, so that a lid closing
+the label at the valve plane or another structure does not pull the mesh.
+
+A chain of small steps drifts: every step adds its own error along the wall, and
+nothing brings the vertices back. With ``refine_ed`` every frame is also reached
+from end-diastole directly (one step from the ED mesh, the surface cropped about the
+chain's result, the affine fit started from the affine map of the ED mesh onto the
+chain's result, which only saves iterations), and the two results are combined with the weight of the direct one
+growing with the frame's position in the cycle (:func:`combine_weight`,
+``w_t = t / n``, ``n`` the number of frames): early frames, a short chain away from
+ED, follow the chain; late frames, which relax back towards ED and end a long chain,
+follow the direct result, which is then a short step. This is the weighting by
+which cine pipelines combine a forward chain with a backward one starting from the
+next end-diastole; the ED mesh plays the next end-diastole here (a cycle is
+periodic). The weighted mean of two points on a surface lies slightly off it, so
+the combination is projected back along its normals; the chain goes on from the
+combined result. The distance between the two results (``drift_rms``) is recorded.
+
+What a surface cannot show is said in ``docs/tracking.md``: the motion along the wall
+(the twist about the long axis above all) is not in the surfaces, so the tracked
+vertices carry the motion across the wall and the affine part of the motion along it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from manifolds.data_terms.mesh_geometry import check_mesh
+
+from ..preparation.affine import affine_icp, apply_affine
+from ..preparation.alignment import SimilarityTransform
+from ..preparation.correspondence import correspond_mesh
+from ..preparation.surface_distance import distances_to_surface
+from ..wall_motion import normal_wall_motion
+from .settings import TrackingSettings
+
+__all__ = ["TrackedSurfaces", "track_surfaces", "combine_weight", "crop_surface"]
+
+#: A cropped surface keeping fewer faces than this fraction is refused.
+_MIN_KEPT = 0.05
+
+
+@dataclass
+class TrackedSurfaces:
+    """A mesh followed through the frames of a cycle.
+
+    Attributes
+    ----------
+    vertices : ndarray, shape (n_frames, k, 3)
+        The tracked mesh at every frame (mm; frame 0 is the ED mesh as given), in the
+        frame of the surfaces.
+    faces : ndarray of int, shape (f, 3)
+        The mesh's triangles (the atlas's), shared by every frame.
+    quality : list of dict
+        Per frame: ``mean_distance``, ``max_distance`` (of the vertices to the frame's
+        surface, mm), ``step_rms`` (RMS motion from the previous frame, mm),
+        ``hit_fraction`` (vertices whose normal met the surface; projection),
+        ``converged`` and ``n_iter`` (registration), ``weight_ed`` and ``drift_rms``
+        (with ``refine_ed``: the weight of the direct result and the RMS distance
+        between the chain's and the direct result, mm), ``kept_faces`` (fraction of the
+        surface kept by the crop).
+    settings : TrackingSettings
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    quality: list = field(default_factory=list)
+    settings: TrackingSettings = field(default_factory=TrackingSettings)
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames."""
+        return int(self.vertices.shape[0])
+
+
+def combine_weight(frame: int, n_frames: int) -> float:
+    """Weight of the result reached from ED directly at ``frame`` of ``n_frames``: ``frame / n_frames``.
+
+    0 at ED, growing with the chain's length; the (virtual) frame ``n_frames`` is the
+    next end-diastole, where the direct result would be exact.
+    """
+    if n_frames < 1 or not 0 <= frame < n_frames:
+        raise ValueError(f"combine_weight: expected 0 <= frame < n_frames, got {frame}, {n_frames}")
+    return float(frame) / float(n_frames)
+
+
+def crop_surface(vertices, faces, near_vertices, near_faces, distance: float | None):
+    """The triangles of ``(vertices, faces)`` whose centroid lies within ``distance`` of a mesh.
+
+    Parameters
+    ----------
+    vertices, faces : arrays ``(m, 3)``, ``(g, 3)``
+        The surface cropped (mm).
+    near_vertices, near_faces : arrays ``(k, 3)``, ``(f, 3)``
+        The mesh it is cropped about.
+    distance : float or None
+        mm; None keeps the whole surface.
+
+    Returns
+    -------
+    vertices, faces, kept : the cropped surface (unused vertices dropped) and the
+    fraction of the faces kept.
+    """
+    if distance is None:
+        return vertices, faces, 1.0
+    mesh = trimesh.Trimesh(near_vertices, near_faces, process=False)
+    centroids = vertices[faces].mean(axis=1)
+    near = trimesh.proximity.closest_point(mesh, centroids)[1] <= distance
+    kept = faces[near]
+    used = np.unique(kept)
+    index = np.full(len(vertices), -1, dtype=np.int64)
+    index[used] = np.arange(len(used))
+    return vertices[used], index[kept], float(near.mean()) if len(faces) else 0.0
+
+
+def _cropped(target, about, faces, settings: TrackingSettings, frame: int):
+    tv, tf, kept = crop_surface(*target, about, faces, settings.crop_distance)
+    if len(tf) < 4 or kept < _MIN_KEPT:
+        raise ValueError(
+            f"frame {frame}: the mesh is farther than crop_distance = {settings.crop_distance} mm "
+            f"from the frame's surface ({100 * kept:.1f} % of it within): a surface of another "
+            "subject or frame, or a motion between frames larger than crop_distance"
+        )
+    return tv, tf, kept
+
+
+def _point_affine(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The least-squares affine map ``(4, 4)`` of corresponding points ``source -> target``."""
+    solution = np.linalg.lstsq(np.c_[source, np.ones(len(source))], target, rcond=None)[0]
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = solution[:3].T, solution[3]
+    return out
+
+
+def _projection(start, faces, tv, tf, settings: TrackingSettings, guess=None):
+    """The affine fit of ``start`` onto the surface, then along its normals onto it.
+
+    ``guess`` (points corresponding to ``start``, e.g. the chain's result for a step
+    from ED) starts the affine fit at their least-squares affine map."""
+    warm = np.eye(4) if guess is None else _point_affine(start, guess)
+    moved = apply_affine(warm, start)
+    matrix = affine_icp(moved, faces, tv, tf, iterations=settings.affine_iterations,
+                        tol=settings.affine_tol) @ warm  # fmt: skip
+    proj = normal_wall_motion(apply_affine(matrix, start), faces, tv, tf,
+                              max_distance=settings.normal_max_distance)  # fmt: skip
+    return proj.points, {"hit_fraction": float(proj.hit.mean())}
+
+
+def _registration(start, faces, tv, tf, settings: TrackingSettings, guess=None):
+    """``start`` registered onto the surface (LDDMM, varifold), no rigid re-alignment."""
+    out = correspond_mesh(start, faces, tv, tf, settings.correspondence,
+                          transform=SimilarityTransform.identity())  # fmt: skip
+    return out.vertices, {"converged": out.quality["converged"], "n_iter": out.quality["n_iter"]}
+
+
+def _step(start, faces, target, about, settings: TrackingSettings, frame: int, guess=None):
+    tv, tf, kept = _cropped(target, about, faces, settings, frame)
+    move = _projection if settings.method == "projection" else _registration
+    points, info = move(start, faces, tv, tf, settings, guess)
+    return points, {**info, "kept_faces": kept}, (tv, tf)
+
+
+def _combine(chain, direct, weight, faces, cropped, settings: TrackingSettings) -> np.ndarray:
+    """The weighted mean of two results on a surface, projected back onto it along its normals."""
+    mean = (1.0 - weight) * chain + weight * direct
+    return normal_wall_motion(
+        mean, faces, *cropped, max_distance=settings.normal_max_distance
+    ).points
+
+
+def _frames(frame_surfaces) -> list[tuple[np.ndarray, np.ndarray]]:
+    try:
+        surfaces = list(frame_surfaces)
+    except TypeError:
+        raise ValueError(
+            "track_surfaces: frame_surfaces: expected a list of (vertices, faces)"
+        ) from None
+    if not surfaces:
+        raise ValueError("track_surfaces: frame_surfaces: no frame")
+    out = []
+    for t, surface in enumerate(surfaces):
+        try:
+            v, f = surface
+        except (TypeError, ValueError):
+            raise ValueError(f"track_surfaces: frame {t}: expected (vertices, faces)") from None
+        out.append(check_mesh(v, f, f"track_surfaces: frame {t}"))
+    return out
+
+
+def track_surfaces(
+    ed_vertices, faces, frame_surfaces, settings: TrackingSettings | None = None
+) -> TrackedSurfaces:
+    """Follow the ED mesh through the frames' surfaces (see the module).
+
+    Parameters
+    ----------
+    ed_vertices : array, shape (k, 3)
+        The end-diastolic mesh in the atlas's vertex correspondence, in the frame and
+        unit (mm) of the surfaces.
+    faces : array of int, shape (f, 3)
+        Its triangles (outward normals).
+    frame_surfaces : sequence of (vertices (m_t, 3), faces (g_t, 3))
+        The surface of every frame, any triangulation; frame 0 is end-diastole.
+    settings : TrackingSettings, optional
+
+    Returns
+    -------
+    TrackedSurfaces
+        ``vertices`` of shape ``(n_frames, k, 3)`` (float64, mm) and a quality per frame.
+
+    Raises
+    ------
+    ValueError
+        A bad mesh or surface, or a frame's surface that does not lie within
+        ``settings.crop_distance`` of the mesh moved onto it.
+    """
+    settings = settings or TrackingSettings()
+    ed, faces = check_mesh(ed_vertices, faces, "track_surfaces: ED mesh")
+    ed = np.asarray(ed, dtype=np.float64)
+    surfaces = _frames(frame_surfaces)
+    n = len(surfaces)
+    tracked = np.empty((n, len(ed), 3))
+    tracked[0] = ed
+    quality = [
+        {"step_rms": 0.0, **({"weight_ed": 0.0, "drift_rms": 0.0} if settings.refine_ed else {})}
+    ]
+    for t in range(1, n):
+        previous = tracked[t - 1]
+        points, info, cropped = _step(previous, faces, surfaces[t], previous, settings, t)
+        if settings.refine_ed:
+            direct, _, _ = _step(ed, faces, surfaces[t], points, settings, t, guess=points)
+            weight = combine_weight(t, n)
+            info.update(weight_ed=weight, drift_rms=_rms(points - direct))
+            points = _combine(points, direct, weight, faces, cropped, settings)
+        tracked[t] = points
+        info["step_rms"] = _rms(points - previous)
+        quality.append(info)
+    for t, (v, f) in enumerate(surfaces):
+        d = distances_to_surface(tracked[t], v, f)
+        quality[t].update(mean_distance=float(d.mean()), max_distance=float(d.max()))
+    return TrackedSurfaces(tracked, faces, quality, settings)
+
+
+def _rms(displacement: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.sum(displacement**2, axis=-1))))
