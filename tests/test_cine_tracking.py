@@ -236,3 +236,31 @@ def test_bad_input_names_the_argument(change, name):
 def test_bad_settings_name_the_field(field, value):
     with pytest.raises(ValueError, match=field):
         CineTrackingSettings(**{field: value})
+
+
+def test_symladders_track_cine_moves_each_subject_as_track_cine_does(tmp_path, case, capsys):
+    """``symladders track MESHES IMAGES --cine``: a subject's frames equal ``track_cine`` on the
+    same (float32-stored) series; a subject without a series is recorded as failed (exit 1)."""
+    from ladders.study.cli import main
+    from ladders.study.cohort import make_synthetic_cohort as cohort_of
+    from ladders.study.imaging import write_series
+    from ladders.study.meshes import read_mesh, write_mesh
+
+    series = case["tagged"][:2]
+    meshes, images = tmp_path / "meshes", tmp_path / "images"
+    meshes.mkdir()
+    faces = cohort_of(1, n_vertices=241).faces
+    write_mesh(meshes / "case_ed.vtk", case["ed"], faces)
+    write_mesh(meshes / "orphan_ed.vtk", case["ed"], faces)
+    write_series(images / "case.nii.gz", series, case["affine"])
+    out = tmp_path / "tracked"
+    argv = ["track", str(meshes), str(images), "--cine", "--control-point-spacing", "20",
+            "--iterations", "15", "-o", str(out), "--jobs", "1", "--no-progress"]  # fmt: skip
+    assert main(argv) == 1
+    assert "orphan" in capsys.readouterr().err
+    stored = series.astype(np.float32).astype(float)
+    expected = track_cine(stored, case["affine"], case["ed"], SETTINGS)
+    for t in range(2):
+        got, _ = read_mesh(out / "case" / f"frame_{t:02d}.vtk")
+        np.testing.assert_allclose(got, expected[t], atol=1e-3)
+    assert main([*argv[:3], "-o", str(out)]) == 2  # label series need --label

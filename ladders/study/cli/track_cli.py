@@ -71,7 +71,9 @@ def add_track_parser(sub) -> None:
             "OUTPUT holds <subject>/frame_<kk>.vtk (the atlas's faces), <subject>.json "
             "(provenance and per-frame quality) and tracking.csv. A failing subject is recorded "
             "with its reason and the others finish (exit 1); a rerun skips the subjects done "
-            "with the same inputs and settings."
+            "with the same inputs and settings. With --cine, IMAGES holds cine intensity "
+            "series instead and the mesh is moved by B-spline registrations between "
+            "consecutive frames (SimpleITK), composed forward and backward through the cycle."
         ),
         formatter_class=DefaultsFormatter,
     )
@@ -79,7 +81,14 @@ def add_track_parser(sub) -> None:
                    help="folder of corresponded meshes (<subject>_ed.<ext>)")  # fmt: skip
     p.add_argument("images", type=existing_folder, metavar="IMAGES",
                    help="folder of label series (4-D NIfTI or folders of frames)")  # fmt: skip
-    p.add_argument("--label", type=nonnegative_int, required=True, help="the structure's label")
+    p.add_argument("--label", type=nonnegative_int, default=None,
+                   help="the structure's label (required for label series)")  # fmt: skip
+    p.add_argument("--cine", action="store_true",
+                   help="IMAGES are cine intensity series: track by image registration")  # fmt: skip
+    p.add_argument("--control-point-spacing", type=positive_float, default=10.0, metavar="MM",
+                   help="with --cine: spacing of the B-spline control points (mm)")  # fmt: skip
+    p.add_argument("--iterations", type=nonnegative_int, default=30,
+                   help="with --cine: optimiser iterations per resolution level")  # fmt: skip
     p.add_argument("--output", "-o", type=output_folder, default="symladders-output/tracked",
                    help="folder of the tracked meshes")  # fmt: skip
     p.add_argument("--method", choices=("projection", "registration"), default="projection",
@@ -104,16 +113,25 @@ def add_track_parser(sub) -> None:
 def run_track_command(args) -> int:
     """Track the subjects from parsed arguments."""
     from ..imaging import MeshingSettings
-    from ..tracking import SeriesError, TrackingSettings, track_cohort
+    from ..tracking import CineTrackingSettings, SeriesError, TrackingSettings, track_cohort
 
+    if args.label is None and not args.cine:
+        raise UsageError("symladders track: error: --label: required for label series (or --cine)")
     planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
     try:
-        settings = TrackingSettings(
-            method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
-            meshing=MeshingSettings(n_vertices=args.vertices or None),
-        )  # fmt: skip
-        outcome = track_cohort(args.meshes, args.images, args.output, args.label, settings,
+        if args.cine:
+            settings = CineTrackingSettings(
+                control_point_spacing=args.control_point_spacing,
+                iterations=max(1, args.iterations),
+            )
+        else:
+            settings = TrackingSettings(
+                method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
+                meshing=MeshingSettings(n_vertices=args.vertices or None),
+            )  # fmt: skip
+        label = 0 if args.label is None else args.label
+        outcome = track_cohort(args.meshes, args.images, args.output, label, settings,
                                cut_planes=planes, jobs=args.jobs,
                                progress=not args.no_progress)  # fmt: skip
     except (SeriesError, ValueError) as exc:

@@ -41,7 +41,9 @@ Conventions
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import hashlib
+import json
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -106,6 +108,16 @@ class CineTrackingSettings:
     seed: int = 0
     combine: str = "both"
     threads: int = 1
+
+    def as_dict(self) -> dict:
+        """JSON-ready fields, with ``route: "cine"``."""
+        out = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+        return {"route": "cine", **out}
+
+    def key(self) -> str:
+        """Stable hash of every setting (what a stored result depends on)."""
+        text = json.dumps(self.as_dict(), sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def __post_init__(self):
         cps = self.control_point_spacing

@@ -45,9 +45,10 @@ from ..files import atomic_write_text, file_sha256
 from ..imaging.surface_extraction import MeshingSettings, extract_surface
 from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
 from ..preparation.alignment import SimilarityTransform
+from .cine_tracking import CineTrackingSettings, track_cine
 from .label_series import SeriesError, check_field_of_view, find_series, open_series
 from .settings import TrackingSettings
-from .surface_tracking import track_surfaces
+from .surface_tracking import TrackedSurfaces, track_surfaces
 
 __all__ = ["TrackingTask", "TrackingOutcome", "plan_tracking", "track_cohort", "REPORT_FILE"]
 
@@ -224,21 +225,28 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
         if task.error:
             raise SeriesError(task.error)
         record["fingerprint"] = _fingerprint(task, label, settings, planes)
-        series = open_series(task.series)
+        cine = isinstance(settings, CineTrackingSettings)
+        series = open_series(task.series, labels=not cine)
         vertices, faces = read_mesh(task.ed)
         transform = (
             None if task.transform is None else SimilarityTransform.from_dict(task.transform)
         )
         scanner = vertices if transform is None else transform.inverse().apply(vertices)
         check_field_of_view(scanner, series, f"{task.ed}")
-        surfaces, reports = [], []
-        for t in range(series.n_frames):
-            v, f, report = extract_surface(
-                series.frame(t), label, _frame_settings(settings.meshing, planes, t)
+        reports = []
+        if cine:  # B-spline registrations of the intensities, forward and backward
+            tracked = TrackedSurfaces(
+                track_cine(series.intensities(), series.affine, scanner, settings), faces
             )
-            surfaces.append((v, f))
-            reports.append(report.as_dict())
-        tracked = track_surfaces(scanner, faces, surfaces, settings)
+        else:
+            surfaces = []
+            for t in range(series.n_frames):
+                v, f, report = extract_surface(
+                    series.frame(t), label, _frame_settings(settings.meshing, planes, t)
+                )
+                surfaces.append((v, f))
+                reports.append(report.as_dict())
+            tracked = track_surfaces(scanner, faces, surfaces, settings)
         _clear(output, task.subject, ext)
         for t in range(series.n_frames):
             frame = (
@@ -246,7 +254,7 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
             )
             write_mesh(output / task.subject / _frame_name(t, series.n_frames, ext), frame, faces,
                        atomic=True)  # fmt: skip
-        worst = max(q["mean_distance"] for q in tracked.quality)
+        worst = max((q["mean_distance"] for q in tracked.quality), default=float("nan"))
         record.update(
             status="ok", ed_mesh=str(task.ed.resolve()), series=[str(p.resolve()) for p in series.files],
             n_frames=series.n_frames, label=int(label), frame="atlas" if transform else "images",
@@ -288,7 +296,7 @@ def track_cohort(
     images,
     output,
     label: int,
-    settings: TrackingSettings | None = None,
+    settings: TrackingSettings | CineTrackingSettings | None = None,
     cut_planes: dict | None = None,
     jobs: int = 2,
     progress: bool = True,
@@ -307,8 +315,12 @@ def track_cohort(
         The folder written (created).
     label : int
         The label meshed (e.g. the left-ventricle cavity).
-    settings : TrackingSettings, optional
-        With the meshing settings of the frames (``settings.meshing``).
+    settings : TrackingSettings or CineTrackingSettings, optional
+        With the meshing settings of the frames (``settings.meshing``). A
+        :class:`~.cine_tracking.CineTrackingSettings` tracks cine intensity series
+        instead (:func:`~.cine_tracking.track_cine`: the frames are not meshed, the ED
+        mesh is moved by B-spline registrations of the images; ``label`` and
+        ``cut_planes`` are not used).
     cut_planes : dict, optional
         ``{subject or series file name: plane}`` with ``plane`` ``(x, y, z, nx, ny, nz)``
         in world mm for every frame, or ``{frame: plane}`` per frame (0-based; a key

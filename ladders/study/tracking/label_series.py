@@ -73,6 +73,26 @@ class LabelSeries:
         """The series' file, or its folder of frames."""
         return str(self.files[0] if self.four_d else self.files[0].parent)
 
+    def intensities(self) -> np.ndarray:
+        """Every frame's voxel values as floats, shape ``(n_frames, *shape)`` (cine images).
+
+        Raises
+        ------
+        SeriesError
+            A value is not finite.
+        """
+        if self.four_d:
+            data = np.asarray(nib.load(str(self.files[0])).dataobj, dtype=float)
+            frames = np.moveaxis(data, 3, 0)
+        else:
+            frames = np.stack([
+                np.asarray(nib.load(str(p)).dataobj, dtype=float).reshape(self.shape)
+                for p in self.files
+            ])  # fmt: skip
+        if not np.isfinite(frames).all():
+            raise SeriesError(f"{self.name}: NaN or infinite intensities")
+        return frames
+
     def frame(self, t: int) -> LabelImage:
         """Frame ``t`` (0-based, 0 is end-diastole) as a label image with its affine."""
         if not 0 <= int(t) < self.n_frames:
@@ -138,7 +158,7 @@ def _header(path: Path):
         ) from None
 
 
-def _open_four_d(path: Path) -> LabelSeries:
+def _open_four_d(path: Path, labels: bool = True) -> LabelSeries:
     shape, affine = _header(path)
     if len(shape) == 3 or (len(shape) == 4 and shape[3] == 1):
         raise SeriesError(
@@ -147,7 +167,8 @@ def _open_four_d(path: Path) -> LabelSeries:
         )
     if len(shape) != 4:
         raise SeriesError(f"{path}: expected a 4-D series (x, y, z, frames), got shape {shape}")
-    read_label_image(path, 0)  # the affine, the label values: refused here, with the file named
+    if labels:  # the affine, the label values: refused here, with the file named
+        read_label_image(path, 0)
     return LabelSeries((path,), int(shape[3]), tuple(int(n) for n in shape[:3]), affine)
 
 
@@ -160,7 +181,7 @@ def _frame_number(path: Path) -> int:
     return int(match.group(1))
 
 
-def _open_folder(files: tuple[Path, ...]) -> LabelSeries:
+def _open_folder(files: tuple[Path, ...], labels: bool = True) -> LabelSeries:
     folder = files[0].parent
     numbered: dict[int, Path] = {}
     for path in files:
@@ -197,12 +218,15 @@ def _open_folder(files: tuple[Path, ...]) -> LabelSeries:
                 f"{path}: its grid differs from {ordered[0].name}'s (shape {tuple(shape)} vs "
                 f"{tuple(shape0[:3])}, or another affine): every frame of a series must share one grid"
             )
-    read_label_image(ordered[0])
+    if labels:
+        read_label_image(ordered[0])
     return LabelSeries(ordered, len(ordered), tuple(int(n) for n in shape0[:3]), affine0)
 
 
-def open_series(source) -> LabelSeries:
+def open_series(source, labels: bool = True) -> LabelSeries:
     """Check a series (a 4-D file, or a folder of 3-D frame files) and describe it.
+
+    ``labels=False`` accepts intensity images (cine), whose values are not labels.
 
     Raises
     ------
@@ -214,10 +238,10 @@ def open_series(source) -> LabelSeries:
         files = tuple(sorted(p for p in source.iterdir() if _is_image(p)))
         if not files:
             raise SeriesError(f"{source}: a folder without NIfTI frames")
-        return _open_folder(files)
+        return _open_folder(files, labels)
     if not _is_image(source):
         raise SeriesError(f"{source}: not a NIfTI file (.nii or .nii.gz) or a folder of frames")
-    return _open_four_d(source)
+    return _open_four_d(source, labels)
 
 
 def check_field_of_view(vertices, series: LabelSeries, what: str = "ED mesh") -> None:
