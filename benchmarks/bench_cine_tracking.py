@@ -34,6 +34,7 @@ from generated_tables import machine, publish  # noqa: E402
 from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward  # noqa: E402
 from ladders.study.imaging import TagGrid, render_cine  # noqa: E402
 from ladders.study.tracking.cine_tracking import CineTrackingSettings, track_cine  # noqa: E402
+from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
 
 GRIDS = {"short-axis 1.5 x 1.5 x 8 mm": (1.5, 1.5, 8.0), "isotropic 1.5 mm": (1.5, 1.5, 1.5)}
 SETTINGS = CineTrackingSettings(control_point_spacing=20.0, sampling_percentage=0.05, iterations=20)
@@ -46,15 +47,6 @@ def grid(voxel):
     affine[:3, :3] = np.diag(voxel)
     affine[:3, 3] = lo
     return affine, shape
-
-
-def normals(vertices, faces):
-    tri = vertices[faces]
-    face_n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    n = np.zeros_like(vertices)
-    for corner in range(3):
-        np.add.at(n, faces[:, corner], face_n)
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
 def rotation_deg(before, after):
@@ -90,7 +82,7 @@ def run(n_subjects: int, n_frames: int, settings=SETTINGS, grids=tuple(GRIDS)):
                 out["seconds"].append(time.perf_counter() - start)
                 truth = motion_forward(params, ed, fractions[es_frame])
                 error = tracked[es_frame] - truth
-                n = normals(truth, cohort.faces)
+                n = outward_vertex_normals(truth, cohort.faces)
                 along = np.einsum("ij,ij->i", error, n)
                 out["normal"].append(np.abs(along).mean())
                 out["tangential"].append(np.linalg.norm(error - along[:, None] * n, axis=1).mean())

@@ -22,6 +22,7 @@ from ladders.study.tracking.cine_tracking import (  # noqa: E402
     register_frames,
     track_cine,
 )
+from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
 
 N_FRAMES, ES_PHASE, ES_FRAME = 4, 0.5, 2
 VOXEL = 2.5
@@ -47,15 +48,6 @@ def _series(params, affine, shape, tagging, seed):
         for f in fractions
     ]
     return np.stack(frames), fractions
-
-
-def _normals(vertices, faces):
-    tri = vertices[faces]
-    face_n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    n = np.zeros_like(vertices)
-    for corner in range(3):
-        np.add.at(n, faces[:, corner], face_n)
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
 def _split(error, normals):
@@ -85,7 +77,7 @@ def case():
     tagged, fractions = _series(params, affine, shape, TagGrid(), seed=1)
     plain, _ = _series(params, affine, shape, None, seed=2)
     truth = motion_forward(params, ed, fractions[ES_FRAME])
-    normals = _normals(truth, cohort.faces)
+    normals = outward_vertex_normals(truth, cohort.faces)
     return dict(params=params, ed=ed, affine=affine, tagged=tagged, plain=plain,
                 fractions=fractions, truth=truth, normals=normals)  # fmt: skip
 
