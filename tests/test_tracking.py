@@ -194,6 +194,23 @@ def test_frames_on_different_grids_are_refused(tmp_path):
     assert series.n_frames == 2 and series.frame(1).frame == 1
 
 
+def test_all_frames_read_at_once_equal_the_frames_read_one_by_one(tmp_path):
+    moved = np.roll(_labels(), 1, axis=0)
+    for name in ("four_d.nii.gz", "folder"):
+        if name == "folder":
+            for t, labels in enumerate((_labels(), moved, _labels())):
+                write_label_image(tmp_path / name / f"frame_{t:02d}.nii.gz", labels, np.eye(4))
+        else:
+            write_series(tmp_path / name, [_labels(), moved, _labels()], np.eye(4))
+        series = open_series(tmp_path / name)
+        frames = series.frames()
+        assert [f.frame for f in frames] == [0, 1, 2]
+        for t, image in enumerate(frames):
+            np.testing.assert_array_equal(image.labels, series.frame(t).labels)
+            np.testing.assert_array_equal(image.affine, series.frame(t).affine)
+        np.testing.assert_array_equal(frames[1].labels, moved)
+
+
 def test_an_ed_mesh_outside_the_field_of_view_is_refused(tmp_path, subject):
     series = open_series(
         write_series(tmp_path / "s.nii.gz", subject["labels"][:2], subject["affine"])

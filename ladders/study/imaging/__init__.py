@@ -28,7 +28,14 @@ from .cine import (
     tag_pattern,
     write_series,
 )
-from .label_images import IMAGE_SUFFIXES, ImageError, LabelImage, image_stem, read_label_image
+from .label_images import (
+    IMAGE_SUFFIXES,
+    ImageError,
+    LabelImage,
+    image_stem,
+    read_label_image,
+    read_label_series,
+)
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
 from .rv_label import add_rv_label, voxel_centres
 from .septum import label_centroid, landmarks_from_labels, lv_apex_and_base
@@ -47,6 +54,7 @@ __all__ = [
     "LabelImage",
     "image_stem",
     "read_label_image",
+    "read_label_series",
     "REPORT_FILE",
     "MeshingOutcome",
     "MeshingTask",

@@ -19,7 +19,14 @@ import numpy as np
 
 from ..errors import MeshFolderError
 
-__all__ = ["ImageError", "LabelImage", "read_label_image", "IMAGE_SUFFIXES", "image_stem"]
+__all__ = [
+    "ImageError",
+    "LabelImage",
+    "read_label_image",
+    "read_label_series",
+    "IMAGE_SUFFIXES",
+    "image_stem",
+]
 
 #: File suffixes of the label images read.
 IMAGE_SUFFIXES = (".nii.gz", ".nii")
@@ -129,6 +136,11 @@ def read_label_image(path, frame: int | None = None) -> LabelImage:
         frame = None
     else:
         raise ImageError(f"{path}: expected a 3-D or 4-D image, got {data.ndim} dimensions")
+    return _label_image(data, affine, path, frame)
+
+
+def _label_image(data, affine, path: Path, frame: int | None) -> LabelImage:
+    """A 3-D array of one frame as a :class:`LabelImage`; refused unless its values are integers."""
     if not np.issubdtype(data.dtype, np.integer):
         values = np.asarray(data, dtype=float)
         if not np.isfinite(values).all() or np.any(values != np.round(values)):
@@ -140,3 +152,25 @@ def read_label_image(path, frame: int | None = None) -> LabelImage:
     return LabelImage(
         np.asarray(data).astype(np.int64), affine, path, None if frame is None else int(frame)
     )
+
+
+def read_label_series(path) -> list[LabelImage]:
+    """Every frame of a 4-D NIfTI label series, the file read once (see :func:`read_label_image`).
+
+    Raises
+    ------
+    ImageError
+        Not a 4-D NIfTI file, or values that are not labels.
+    """
+    path = Path(path)
+    if not path.name.lower().endswith(IMAGE_SUFFIXES):
+        raise ImageError(f"{path}: not a NIfTI file (.nii or .nii.gz)")
+    try:
+        img = nib.load(str(path))
+        data = np.asanyarray(img.dataobj)
+    except Exception as exc:  # noqa: BLE001 - nibabel raises many kinds for a bad file
+        raise ImageError(f"{path}: cannot be read as NIfTI ({type(exc).__name__}: {exc})") from None
+    if data.ndim != 4:
+        raise ImageError(f"{path}: expected a 4-D series, got {data.ndim} dimensions")
+    affine = _affine(img, path)
+    return [_label_image(data[..., t], affine, path, t) for t in range(data.shape[3])]

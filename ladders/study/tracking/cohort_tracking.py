@@ -240,9 +240,9 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
             )
         else:
             surfaces = []
-            for t in range(series.n_frames):
+            for t, image in enumerate(series.frames()):
                 v, f, report = extract_surface(
-                    series.frame(t), label, _frame_settings(settings.meshing, planes, t)
+                    image, label, _frame_settings(settings.meshing, planes, t)
                 )
                 surfaces.append((v, f))
                 reports.append(report.as_dict())

@@ -32,6 +32,7 @@ from ..imaging.label_images import (
     LabelImage,
     image_stem,
     read_label_image,
+    read_label_series,
 )
 
 __all__ = ["SeriesError", "LabelSeries", "find_series", "open_series", "check_field_of_view"]
@@ -92,6 +93,12 @@ class LabelSeries:
         if not np.isfinite(frames).all():
             raise SeriesError(f"{self.name}: NaN or infinite intensities")
         return frames
+
+    def frames(self) -> list[LabelImage]:
+        """Every frame in order, each file read once (a 4-D file is not read per frame)."""
+        if self.four_d:
+            return read_label_series(self.files[0])
+        return [self.frame(t) for t in range(self.n_frames)]
 
     def frame(self, t: int) -> LabelImage:
         """Frame ``t`` (0-based, 0 is end-diastole) as a label image with its affine."""
