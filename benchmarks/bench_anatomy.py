@@ -13,8 +13,8 @@ from the same distribution and act on their own anatomy (the same motion relativ
 the anatomy); ``anatomy_effect``, the same with the default hypokinesia planted in the
 dilated group. Every subject's ideal transport is known
 (:func:`~ladders.study.population.ideal_transport`: its own motion parameters on the
-atlas's anatomy). Studies: LDDMM at ``alpha^2`` in 0.01, 1 and 100 and SVF at 1, all
-transports of the default study. For every transport, and the motion without
+atlas's anatomy). Studies: LDDMM and SVF at every ``alpha^2`` of the default study
+(:data:`ALPHA2`), all transports of the default study. For every transport, and the motion without
 transport, with and without the volume normalisation:
 
 * the distance to the ideal transport (mean over the vertices, per subject; the
@@ -62,7 +62,8 @@ COHORTS = {
     "anatomy": (("controls", None), ("dilated", SHIFT)),
     "anatomy_effect": (("controls", None), ("dilated", DEFAULT_ABNORMALITY, SHIFT)),
 }
-PLAN = (("lddmm", (0.01, 1.0, 100.0)), ("svf", (1.0,)))
+ALPHA2 = (0.01, 0.1, 1.0, 10.0, 33.0, 100.0, 1089.0)  # the default study's grid
+PLAN = (("lddmm", ALPHA2), ("svf", ALPHA2))
 
 
 def _cohort(name: str, n: int):

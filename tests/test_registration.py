@@ -70,6 +70,18 @@ def test_non_convergence_warns_and_warm_start_resumes():
     assert warm.objective <= full.objective * (1 + 1e-12)
 
 
+@pytest.mark.parametrize("stopping", ["shape", "objective"])
+def test_a_shape_registered_to_itself_converges_without_a_warning(stopping):
+    """A zero gradient at the start is a minimum, not a failure to converge."""
+    space = LDDMMLandmarks(15, 3, sigma=0.6, alpha=0.1, control_points="dense", stopping=stopping)
+    shape = space.random_point(np.random.default_rng(3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        res = space.register(shape, shape)
+    assert res.converged and res.registration_error == 0.0
+    assert np.all(np.asarray(res.momenta) == 0.0)
+
+
 def test_inverse_consistency_is_small_for_a_nearby_pair():
     space = LDDMMLandmarks(20, 2, sigma=0.5, alpha=0.01, control_points="dense")
     template, target, _ = exact_pair(space, seed=3, scale=0.2)

@@ -14,6 +14,7 @@ from pathlib import Path
 from .cli_types import (
     DefaultsFormatter,
     UsageError,
+    existing_file,
     existing_folder,
     nonnegative_int,
     output_folder,
@@ -22,14 +23,6 @@ from .cli_types import (
 )
 
 __all__ = ["add_analyze_parser", "run_analyze_command"]
-
-
-def _existing_file(text: str) -> Path:
-    path = Path(text).expanduser()
-    if not path.is_file():
-        what = "a folder" if path.is_dir() else "no such file"
-        raise argparse.ArgumentTypeError(f"expected a file, got {text!r} ({what})")
-    return path
 
 
 def _pair(text: str) -> tuple[str, str]:
@@ -60,9 +53,9 @@ def add_analyze_parser(sub) -> None:
     )
     p.add_argument("study", type=existing_folder, metavar="STUDY_OUTPUT",
                    help="folder written by 'symladders study'")  # fmt: skip
-    p.add_argument("--groups", type=_existing_file, default=None,
+    p.add_argument("--groups", type=existing_file, default=None,
                    help="CSV table with the columns subject and group")  # fmt: skip
-    p.add_argument("--design", type=_existing_file, default=None,
+    p.add_argument("--design", type=existing_file, default=None,
                    help="CSV design table: a column subject and any covariates (a linear model "
                         "per vertex instead of two groups; with --model and --contrast)")  # fmt: skip
     p.add_argument("--model", default=None, metavar="FORMULA",
@@ -83,12 +76,12 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--tfce", action="store_true",
                    help="also threshold-free cluster enhancement (H = 2, E = 1) on the atlas's "
                         "triangles, with its own family-wise p-values")  # fmt: skip
-    p.add_argument("--aha", type=_existing_file, default=None, metavar="LANDMARKS",
+    p.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
                    help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
                         "landmark table's row 'atlas'): tables and bull's-eyes per AHA segment")  # fmt: skip
     p.add_argument("--compare", type=_pair, default=None, metavar="A,B",
                    help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
-    p.add_argument("--truth", type=_existing_file, default=None,
+    p.add_argument("--truth", type=existing_file, default=None,
                    help="planted_region.json of a synthetic cohort ('symladders cohort')")  # fmt: skip
     p.add_argument("--null", type=existing_folder, default=None, metavar="NULL_STUDY",
                    help="study of the same subjects without the effect (with --truth)")  # fmt: skip

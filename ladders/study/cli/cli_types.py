@@ -175,6 +175,15 @@ def output_folder(text: str) -> str:
     return str(text)
 
 
+def existing_file(text: str) -> Path:
+    """An argparse type: a path to an existing file (not a folder)."""
+    path = Path(text).expanduser()
+    if not path.is_file():
+        what = "a folder" if path.is_dir() else "no such file"
+        raise argparse.ArgumentTypeError(f"expected a file, got {text!r} ({what})")
+    return path
+
+
 def existing_folder(text: str) -> Path:
     """An existing folder (e.g. of meshes)."""
     path = Path(text).expanduser()

@@ -3,7 +3,8 @@
 Subcommands: ``study``, ``mesh`` (label images to meshes), ``correspond`` and ``atlas`` (a user's segmentations to
 a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
 groups with a planted abnormality), ``analyze`` (group statistics of a study's
-transported motion), ``validate``.
+transported motion), ``validate``, ``track`` (corresponded ED meshes through label or cine
+series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from .cli_types import (
 )
 from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
+from .cycle_cli import add_cycle_parsers
 from .mesh_cli import add_mesh_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
@@ -50,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_analyze_parser(sub)
     add_validate_parser(sub)
     add_track_parser(sub)
+    add_cycle_parsers(sub)
     return parser
 
 

@@ -8,7 +8,7 @@
   anatomy shifts) with age, sex and body size acting on the shapes, and its design table
   (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`); :mod:`.ideal_transport`:
   each subject's own motion on the atlas's anatomy, what a transport should give
-  (:func:`ideal_transport`, :func:`transport_error`);
+  (:func:`ideal_transport`, :func:`ideal_cycle_transport`, :func:`transport_error`);
 - :mod:`.transported_motion`: the subjects' transported motion on the atlas, read
   from a study's results (:class:`TransportedMotion`, :func:`load_transported_motion`);
 - :mod:`.group_comparison`: per-vertex tests with family-wise error control, a
@@ -64,7 +64,12 @@ from .cycle_cohort import (
     two_group_cycles,
 )
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
-from .ideal_transport import MOTION_PARAMETERS, ideal_transport, transport_error
+from .ideal_transport import (
+    MOTION_PARAMETERS,
+    ideal_cycle_transport,
+    ideal_transport,
+    transport_error,
+)
 from .model_analysis import ModelOutcome, analyze_model, check_design_table
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
 from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays
@@ -149,5 +154,6 @@ __all__ = [
     "write_covariate_cohort",
     "MOTION_PARAMETERS",
     "ideal_transport",
+    "ideal_cycle_transport",
     "transport_error",
 ]

@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..cohort.cardiac_cycle import motion_forward
 from ..cohort.planted_effect import planted_modulation
 from ..cohort.synthetic_lv import (
     SubjectParameters,
@@ -29,7 +30,7 @@ from ..errors import CohortError
 from .covariate_cohort import CovariateCohort
 from .two_groups import PATIENTS, TwoGroupCohort
 
-__all__ = ["MOTION_PARAMETERS", "ideal_transport", "transport_error"]
+__all__ = ["MOTION_PARAMETERS", "ideal_cycle_transport", "ideal_transport", "transport_error"]
 
 #: The parameters of :class:`~ladders.study.cohort.synthetic_lv.SubjectParameters` that
 #: describe the motion (the others describe the end-diastolic anatomy).
@@ -55,6 +56,27 @@ def _abnormalities(data) -> dict:
     raise CohortError(
         f"data: expected a CovariateCohort or a TwoGroupCohort, got {type(data).__name__}"
     )
+
+
+def _on_atlas(cohort, model: SyntheticLVModel | None):
+    """The cohort's grid, the model's mean parameters and the atlas, checked to be the cohort's."""
+    model = model or SyntheticLVModel()
+    theta, phi, _ = lv_grid(*grid_shape(cohort.atlas.shape[0]), model)
+    mean = SubjectParameters.mean(model)
+    atlas, _ = lv_shapes(mean, theta, phi)
+    if atlas.shape != cohort.atlas.shape or not np.allclose(atlas, cohort.atlas, atol=1e-9):
+        raise CohortError(
+            "data: its atlas is not the mid-range anatomy of this model on its grid "
+            "(pass the SyntheticLVModel the cohort was drawn with)"
+        )
+    return theta, phi, mean, atlas
+
+
+def _motion_on(mean: SubjectParameters, subject) -> SubjectParameters:
+    """The atlas's anatomy with ``subject``'s motion parameters."""
+    if subject.parameters is None:
+        raise CohortError(f"data: subject {subject.name} has no generator parameters")
+    return replace(mean, **{name: getattr(subject.parameters, name) for name in MOTION_PARAMETERS})
 
 
 def ideal_transport(data, model: SyntheticLVModel | None = None) -> np.ndarray:
@@ -83,27 +105,46 @@ def ideal_transport(data, model: SyntheticLVModel | None = None) -> np.ndarray:
         parameters.
     """
     planted = _abnormalities(data)
-    model = model or SyntheticLVModel()
     cohort = data.cohort
-    theta, phi, _ = lv_grid(*grid_shape(cohort.atlas.shape[0]), model)
-    mean = SubjectParameters.mean(model)
-    atlas, _ = lv_shapes(mean, theta, phi)
-    if atlas.shape != cohort.atlas.shape or not np.allclose(atlas, cohort.atlas, atol=1e-9):
-        raise CohortError(
-            "data: its atlas is not the mid-range anatomy of this model on its grid "
-            "(pass the SyntheticLVModel the cohort was drawn with)"
-        )
+    theta, phi, mean, atlas = _on_atlas(cohort, model)
     modulations = {None: None}
     for abnormality in planted.values():
         if abnormality not in modulations:
             modulations[abnormality] = planted_modulation(abnormality, theta, phi)
     out = np.empty((len(cohort.subjects),) + atlas.shape)
     for i, s in enumerate(cohort.subjects):
-        if s.parameters is None:
-            raise CohortError(f"data: subject {s.name} has no generator parameters")
-        motion = {name: getattr(s.parameters, name) for name in MOTION_PARAMETERS}
-        _, es = lv_shapes(replace(mean, **motion), theta, phi, modulations[planted[s.name]])
+        _, es = lv_shapes(_motion_on(mean, s), theta, phi, modulations[planted[s.name]])
         out[i] = es - atlas
+    return out
+
+
+def ideal_cycle_transport(cycles, model: SyntheticLVModel | None = None) -> np.ndarray:
+    """The ideal transport of every frame: each subject's motion through the cycle on the atlas.
+
+    Parameters
+    ----------
+    cycles : CohortCycles
+        From :func:`~ladders.study.population.make_two_group_cycles` (or
+        :func:`~ladders.study.population.two_group_cycles`).
+    model : SyntheticLVModel, optional
+        The model the cohort was drawn with (default ``SyntheticLVModel()``).
+
+    Returns
+    -------
+    ndarray, shape (n_subjects, n_frames, k, 3)
+        ``T_i(t) - T`` on the atlas ``T`` (mm); frame 0 is zero, and at the ES frame it
+        equals :func:`ideal_transport`.
+    """
+    data = getattr(cycles, "data", None)
+    if data is None or not hasattr(cycles, "fractions"):
+        raise CohortError(f"cycles: expected a CohortCycles, got {type(cycles).__name__}")
+    theta, phi, mean, atlas = _on_atlas(data.cohort, model)
+    out = np.empty((len(cycles.names), len(cycles.fractions)) + atlas.shape)
+    for i, s in enumerate(data.cohort.subjects):
+        params = _motion_on(mean, s)
+        abnormality = cycles.abnormality if cycles.patients[i] else None
+        for t, f in enumerate(cycles.fractions):
+            out[i, t] = motion_forward(params, atlas, float(f), abnormality) - atlas
     return out
 
 

@@ -91,7 +91,8 @@ def minimize_lbfgsb(
     else:
         message = str(res.message)
         converged = bool(res.success) and objective_rule
-        if not converged and "ABNORMAL" in message.upper():
+        stalled = any(w in message.upper() for w in ("ABNORMAL", "PROJECTED GRADIENT"))
+        if not converged and stalled:  # a zero gradient (e.g. template = target) or a stall
             converged = rule.accepts_stall(problem, x, g)
     return OptimizationResult(
         x=x,

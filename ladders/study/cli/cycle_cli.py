@@ -1,0 +1,145 @@
+"""``symladders cycle-study`` and ``symladders cycle-analyze``: whole cycles transported and tested.
+
+Thin wrappers of :func:`~ladders.study.sequences.run_cycle_study` and
+:func:`~ladders.study.sequences.compare_cycles`. ``cycle-study`` exits with status 1
+when a subject failed (the others are stored, the reason is in ``cycle_study.csv`` and
+on standard error), 2 on a usage error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .cli_types import (
+    DefaultsFormatter,
+    UsageError,
+    existing_file,
+    existing_folder,
+    jobs_count,
+    output_folder,
+    positive_float,
+    positive_int,
+)
+
+__all__ = ["add_cycle_parsers", "run_cycle_study_command", "run_cycle_analyze_command"]
+
+
+def add_cycle_parsers(sub) -> None:
+    """Register ``cycle-study`` and ``cycle-analyze`` on an argparse subparsers object."""
+    p = sub.add_parser(
+        "cycle-study",
+        help="transport every tracked frame's motion to the atlas (pole ladder)",
+        description=(
+            "For every subject of FRAMES (the output of 'symladders track': <subject>/"
+            "frame_<kk>.<ext>, frame 0 at end-diastole, in the atlas's correspondence), "
+            "transport the deformation from ED to every frame to the atlas with the pole "
+            "ladder (the paper's Algorithm 1, with residuals): two registrations per frame, "
+            "the midpoint shared. OUTPUT holds <subject>.npz (the transported frames), "
+            "cycle_study.csv and cycle_study.json. Every subject is stored as it finishes; a "
+            "rerun skips the subjects stored with the same frames and settings, and a "
+            "failing subject is recorded while the others go on (exit 1)."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    p.add_argument("frames", type=existing_folder, metavar="FRAMES",
+                   help="folder of <subject>/frame_<kk>.<ext> meshes")  # fmt: skip
+    p.add_argument("--atlas", type=existing_file, required=True,
+                   help="the atlas mesh (the frames' vertex correspondence)")  # fmt: skip
+    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/cycle_study",
+                   help="the study's folder")  # fmt: skip
+    p.add_argument("--alpha2", type=positive_float, default=1.0,
+                   help="the regularisation alpha^2 of the registrations (eq. 3)")  # fmt: skip
+    p.add_argument("--deformation", choices=("lddmm", "svf"), default="lddmm")
+    p.add_argument("--sigma", type=positive_float, default=10.0, help="kernel width (mm)")
+    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects in parallel")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(run=run_cycle_study_command, output_is_file=False)
+
+    q = sub.add_parser(
+        "cycle-analyze",
+        help="compare two groups' cycles: per frame, peak and time to peak of the normal motion",
+        description=(
+            "Test two groups' transported cycles (STUDY, the output of 'symladders "
+            "cycle-study') on the normal motion at every vertex: per frame (FWER over the "
+            "vertices and frames together), and on each vertex's peak inward motion and its "
+            "time in the cycle (FWER over the vertices), by permutation. OUTPUT holds "
+            "cycle_vertices.csv, cycle_frames.csv, cycle_tests.vtu and cycle_curves.png."
+        ),
+        formatter_class=DefaultsFormatter,
+    )
+    q.add_argument("study", type=existing_folder, metavar="STUDY")
+    q.add_argument("--groups", type=existing_file, required=True,
+                   help="CSV with the columns subject,group (two groups)")  # fmt: skip
+    q.add_argument("--compare", nargs=2, default=None, metavar=("GROUP", "REFERENCE"),
+                   help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
+    q.add_argument("--permutations", type=positive_int, default=5000)
+    q.add_argument("--seed", type=int, default=0, help="seed of the permutations")
+    q.add_argument("--output", "-o", type=output_folder, default=None,
+                   help="folder of the results (default: STUDY/analysis)")  # fmt: skip
+    q.set_defaults(run=run_cycle_analyze_command, output_is_file=False)
+
+
+def run_cycle_study_command(args) -> int:
+    """Transport the tracked frames from parsed arguments."""
+    from ..meshes.mesh_io import read_mesh
+    from ..sequences import read_tracked_frames, run_cycle_study
+
+    atlas, faces = read_mesh(args.atlas)
+    sequences = read_tracked_frames(args.frames)
+    args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
+    outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
+                              deformation=args.deformation, jobs=args.jobs,
+                              progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
+    print(
+        f"symladders cycle-study: {len(sequences)} subject(s): {len(outcome.computed)} "
+        f"transported, {len(outcome.reused)} already done, {len(outcome.failures)} failed, in "
+        f"{outcome.output} (cycle_study.csv), {outcome.seconds:.0f} s"
+    )
+    for name, reason in outcome.failures.items():
+        print(f"symladders cycle-study: failed: {name}: {reason}", file=sys.stderr)
+    return 1 if outcome.failures else 0
+
+
+def _two_groups(table: dict, compare, subjects) -> tuple[dict, tuple[str, str]]:
+    present = {s: g for s, g in table.items() if s in subjects}
+    missing = [s for s in subjects if s not in table]
+    if missing:
+        raise UsageError(f"symladders cycle-analyze: error: --groups: no group for {missing}")
+    names = compare or tuple(dict.fromkeys(present.values()))
+    if len(names) != 2:
+        raise UsageError(
+            "symladders cycle-analyze: error: --groups: expected two groups, found "
+            f"{sorted(set(present.values()))}; name two with --compare"
+        )
+    unknown = [g for g in names if g not in present.values()]
+    if unknown:
+        raise UsageError(f"symladders cycle-analyze: error: --compare: no subject in {unknown}")
+    return {s: g == names[0] for s, g in present.items() if g in names}, tuple(names)
+
+
+def run_cycle_analyze_command(args) -> int:
+    """Compare two groups' cycles from parsed arguments."""
+    import numpy as np
+
+    from ..cohort import read_groups
+    from ..sequences import compare_cycles, load_cycle_motion
+    from ..sequences.cycle_outputs import write_cycle_tests
+
+    motion = load_cycle_motion(args.study)
+    labels, names = _two_groups(read_groups(args.groups), args.compare, motion.subjects)
+    if len(labels) < len(motion.subjects):  # subjects of other groups left out
+        keep = [i for i, s in enumerate(motion.subjects) if s in labels]
+        motion = type(motion)(tuple(motion.subjects[i] for i in keep),
+                              motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
+    tests = compare_cycles(motion, labels, args.permutations, np.random.default_rng(args.seed))
+    output = Path(args.output) if args.output else Path(args.study) / "analysis"
+    write_cycle_tests(output, motion, tests, names)
+    found = (tests.peak.p_fwer < 0.05).sum(), (tests.time_to_peak.p_fwer < 0.05).sum()
+    frames = (tests.per_frame.p_fwer < 0.05).any(axis=0).sum()
+    print(
+        f"symladders cycle-analyze: {names[0]} ({int(tests.labels.sum())}) against {names[1]} "
+        f"({int((~tests.labels).sum())}), {args.permutations:,} permutations: vertices found at "
+        f"FWER 5 %: peak {found[0]}, time to peak {found[1]}, some frame {frames}; in {output}"
+    )
+    return 0

@@ -1,0 +1,200 @@
+"""Group tests on whole cycles: per frame, and on the peak and time to peak of the normal motion.
+
+From a cycle study (:func:`~.cycle_study.run_cycle_study`) every subject's motion at
+every frame is a displacement field on the atlas, ``T'_t - T``. Its normal component on
+the atlas's outward vertex normals, ``n_t = <T'_t - T, nu>`` (mm, negative inward),
+is the wall-motion curve of each vertex. Tests (two groups, permutation, family-wise
+error by the maximum statistic):
+
+* per frame: the ``t`` statistic of ``n_t`` at every vertex and frame, FWER over the
+  vertices and the frames together (the maximum is taken over both);
+* the peak inward motion ``max_t (-n_t)`` per vertex, FWER over the vertices;
+* the time to that peak, as a fraction of the cycle, refined between frames by the
+  parabola through the peak frame and its two neighbours, FWER over the vertices.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...statistics import vertexwise_test
+from ...statistics.group_tests import VertexwiseTest
+from ..errors import CohortError
+from ..meshes.mesh_io import read_mesh
+from ..wall_motion import outward_vertex_normals
+
+__all__ = ["CycleMotion", "CycleTests", "compare_cycles", "curve_peaks", "load_cycle_motion"]
+
+
+@dataclass(frozen=True)
+class CycleMotion:
+    """Every subject's transported motion through the cycle, on the atlas.
+
+    Attributes
+    ----------
+    subjects : tuple of str
+    displacement : ndarray, shape (n_subjects, n_frames, k, 3)
+        ``T'_t - T`` (mm).
+    atlas : ndarray, shape (k, 3)
+    faces : ndarray of int, shape (f, 3)
+    """
+
+    subjects: tuple
+    displacement: np.ndarray
+    atlas: np.ndarray
+    faces: np.ndarray
+
+    @property
+    def fractions(self) -> np.ndarray:
+        """The frames' times as fractions of the cycle, ``t / n_frames``."""
+        n = self.displacement.shape[1]
+        return np.arange(n) / n
+
+    def normal(self) -> np.ndarray:
+        """``n_t`` on the atlas's outward normals, shape ``(n_subjects, n_frames, k)``."""
+        nu = outward_vertex_normals(self.atlas, self.faces)
+        return np.einsum("stkd,kd->stk", self.displacement, nu)
+
+
+def load_cycle_motion(folder) -> CycleMotion:
+    """The subjects stored by a cycle study (``cycle_study.json``), in its order.
+
+    Raises
+    ------
+    CohortError
+        Not a cycle study's folder, no subject stored, or subjects with different
+        numbers of frames.
+    """
+    folder = Path(folder)
+    try:
+        record = json.loads((folder / "cycle_study.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        raise CohortError(f"study: {folder} has no readable cycle_study.json "
+                          "(the output of 'symladders cycle-study')") from None  # fmt: skip
+    atlas, faces = read_mesh(folder / "atlas.vtk")
+    names, stacks = [], []
+    for name, status in record.get("subjects", {}).items():
+        if status not in ("computed", "reused"):
+            continue
+        with np.load(folder / f"{name}.npz") as data:
+            stacks.append(data["transported"] - atlas)
+        names.append(name)
+    if not names:
+        raise CohortError(f"study: {folder} stores no transported subject")
+    counts = {len(s) for s in stacks}
+    if len(counts) > 1:
+        per = {n: len(s) for n, s in zip(names, stacks)}
+        raise CohortError(f"study: the subjects have different numbers of frames: {per}")
+    return CycleMotion(tuple(names), np.stack(stacks), atlas, faces)
+
+
+def curve_peaks(curves, fractions=None) -> tuple[np.ndarray, np.ndarray]:
+    """Peak inward motion and its time, per curve.
+
+    Parameters
+    ----------
+    curves : array, shape (..., n_frames, k)
+        Normal motion ``n_t`` (negative inward) over one cycle (periodic).
+    fractions : array, shape (n_frames,), optional
+        The frames' times as fractions of the cycle (default ``t / n_frames``, evenly spaced).
+
+    Returns
+    -------
+    peak : ndarray, shape (..., k)
+        ``max_t (-n_t)`` refined by the parabola through the peak frame and its two
+        neighbours (cyclically).
+    time_to_peak : ndarray, shape (..., k)
+        The parabola's vertex as a fraction of the cycle.
+    """
+    y = -np.asarray(curves, dtype=np.float64)
+    n = y.shape[-2]
+    if n < 3:
+        raise ValueError(f"curves: expected at least 3 frames, got {n}")
+    step = 1.0 / n
+    if fractions is not None:
+        fractions = np.asarray(fractions, dtype=np.float64)
+        if fractions.shape != (n,) or not np.allclose(np.diff(fractions), step):
+            raise ValueError(f"fractions: expected {n} evenly spaced times t / {n}")
+    i = np.argmax(y, axis=-2)[..., None, :]
+    centre = np.take_along_axis(y, i, axis=-2)[..., 0, :]
+    before = np.take_along_axis(y, (i - 1) % n, axis=-2)[..., 0, :]
+    after = np.take_along_axis(y, (i + 1) % n, axis=-2)[..., 0, :]
+    curvature = before - 2.0 * centre + after
+    safe = np.where(curvature < 0, curvature, -1.0)
+    shift = np.where(curvature < 0, 0.5 * (before - after) / safe, 0.0)
+    shift = np.clip(shift, -0.5, 0.5)
+    peak = centre - 0.25 * (before - after) * shift
+    time = ((i[..., 0, :] + shift) * step) % 1.0
+    return peak, time
+
+
+@dataclass(frozen=True)
+class CycleTests:
+    """The tests of :func:`compare_cycles`.
+
+    Attributes
+    ----------
+    per_frame : VertexwiseTest
+        ``t`` maps of shape ``(n_frames, k)`` (``statistic``, ``p_fwer``: FWER over
+        vertices and frames); frame 0 (ED, no motion) has statistic 0 and ``p`` 1.
+    peak, time_to_peak : VertexwiseTest
+        Per vertex, FWER over the vertices.
+    peaks, times : ndarray, shape (n_subjects, k)
+        Every subject's peak inward motion (mm) and time to peak (fraction of the cycle).
+    labels : ndarray of bool, shape (n_subjects,)
+    """
+
+    per_frame: VertexwiseTest
+    peak: VertexwiseTest
+    time_to_peak: VertexwiseTest
+    peaks: np.ndarray
+    times: np.ndarray
+    labels: np.ndarray
+
+
+def _reshaped(test: VertexwiseTest, shape) -> VertexwiseTest:
+    return VertexwiseTest(test.statistic.reshape(shape), test.p_uncorrected.reshape(shape),
+                          test.p_fwer.reshape(shape), test.max_null, test.n_permutations,
+                          test.kind, test.dim, test.group_sizes)  # fmt: skip
+
+
+def compare_cycles(
+    motion: CycleMotion,
+    groups,
+    n_permutations: int = 5000,
+    rng: np.random.Generator | None = None,
+) -> CycleTests:
+    """Test two groups' cycles per frame and on the peak and time to peak (see the module).
+
+    Parameters
+    ----------
+    motion : CycleMotion
+    groups : array of bool, shape (n_subjects,), or dict ``{subject: bool}``
+        True for the first group (e.g. the patients).
+    n_permutations : int, default 5000
+    rng : numpy.random.Generator
+        Draws the permutations (required); the three tests use one stream.
+
+    Returns
+    -------
+    CycleTests
+    """
+    if isinstance(groups, dict):
+        missing = [s for s in motion.subjects if s not in groups]
+        if missing:
+            raise CohortError(f"groups: no group for subject(s) {missing}")
+        groups = [bool(groups[s]) for s in motion.subjects]
+    labels = np.asarray(groups, dtype=bool)
+    if labels.shape != (len(motion.subjects),):
+        raise ValueError(f"groups: expected {len(motion.subjects)} labels, got {labels.shape}")
+    curves = motion.normal()
+    n, n_frames, k = curves.shape
+    per_frame = vertexwise_test(curves.reshape(n, n_frames * k), labels, n_permutations, rng)
+    peaks, times = curve_peaks(curves)
+    peak = vertexwise_test(peaks, labels, n_permutations, rng)
+    timing = vertexwise_test(times, labels, n_permutations, rng)
+    return CycleTests(_reshaped(per_frame, (n_frames, k)), peak, timing, peaks, times, labels)

@@ -1,0 +1,197 @@
+"""Whole cycles in the study: every frame transported by the pole ladder, and the cycle tests."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+
+from ladders.study.cli import main
+from ladders.study.cohort import Subject
+from ladders.study.errors import CohortError
+from ladders.study.meshes.mesh_io import write_mesh
+from ladders.study.population.cycle_cohort import make_two_group_cycles
+from ladders.study.running.pipeline import StudyConfig, compute_pair, make_space
+from ladders.study.sequences import (
+    CycleMotion,
+    compare_cycles,
+    curve_peaks,
+    load_cycle_motion,
+    read_tracked_frames,
+    run_cycle_study,
+    transport_frames,
+)
+from ladders.study.sequences.cycle_outputs import write_cycle_tests
+
+FAST = {"sigma": 20.0, "max_iter": 60}
+N_FRAMES, ES_FRAME = 20, 7  # es_phase 0.35: frame 7 is end-systole
+
+
+@pytest.fixture(scope="module")
+def cycles():
+    return make_two_group_cycles(n_subjects=6, n_frames=N_FRAMES, n_vertices=150, seed=2)
+
+
+def test_the_end_systolic_frame_is_the_study_pair(cycles):
+    """Frame t of a cycle is the study's pair (S, S_t): the ES frame gives compute_pair's ladder."""
+    atlas, faces, frames = cycles.data.cohort.atlas, cycles.faces, cycles.frames[1]
+    assert np.allclose(frames[0], cycles.data.cohort.subjects[1].ed)
+    config = StudyConfig.build(alpha2=(1.0,), **FAST)
+    result = transport_frames(make_space(config, atlas, 1.0), atlas, frames[: ES_FRAME + 1])
+    pair = compute_pair(config, atlas, faces, Subject("s", frames[0], frames[ES_FRAME]), 1.0)
+    ladder = next(t for t in pair.transports if t.method == "pole_ladder_residual")
+    expected = np.asarray(ladder.displacement).reshape(-1, 3)
+    got = result.displacement[ES_FRAME]
+    assert np.abs(got - expected).max() < 1e-8 * np.abs(expected).max()
+    assert np.all(result.displacement[0] == 0)
+    assert result.converged.all()
+
+
+def test_a_subject_equal_to_the_atlas_keeps_its_motion(cycles):
+    """With S = T the ladder is s_T o s_T: the identity, up to the registrations' involutivity."""
+    frames = cycles.frames[0]
+    space = make_space(StudyConfig.build(alpha2=(1.0,), **FAST), frames[0], 1.0)
+    result = transport_frames(space, frames[0], frames[::4])
+    motion = np.linalg.norm(frames[::4] - frames[0], axis=-1).mean(axis=1)
+    error = np.linalg.norm(result.transported - frames[::4], axis=-1).mean(axis=1)
+    assert motion.max() > 3.0  # mm: the check is not trivial
+    assert np.all(error <= 0.05 * motion.max())
+
+
+def test_bad_frames_are_named(cycles):
+    atlas = cycles.data.cohort.atlas
+    space = make_space(StudyConfig.build(alpha2=(1.0,), **FAST), atlas, 1.0)
+    with pytest.raises(ValueError, match="frames: expected at least 2 frames"):
+        transport_frames(space, atlas, cycles.frames[0][:1])
+    with pytest.raises(ValueError, match="vertices per frame, the atlas has"):
+        transport_frames(space, atlas, cycles.frames[0][:, :-1])
+    bad = cycles.frames[0].copy()
+    bad[3, 5, 0] = np.nan
+    with pytest.raises(ValueError, match=r"frame\(s\) \[3\] contain NaN"):
+        transport_frames(space, atlas, bad)
+
+
+def test_study_resumes_records_a_failure_and_goes_on(cycles, tmp_path):
+    atlas, faces = cycles.data.cohort.atlas, cycles.faces
+    seqs = {n: cycles.frames[i][::5] for i, n in enumerate(cycles.names[:3])}
+    seqs["broken"] = cycles.frames[0][::5, :-2]  # not in the atlas's correspondence
+    out = run_cycle_study(atlas, faces, seqs, tmp_path, **FAST)
+    assert sorted(out.computed) == sorted(cycles.names[:3])
+    assert "atlas has" in out.failures["broken"]
+    rows = {r["subject"]: r for r in csv.DictReader(open(tmp_path / "cycle_study.csv"))}
+    assert rows["broken"]["status"] == "failed" and rows[cycles.names[0]]["status"] == "computed"
+    first = load_cycle_motion(tmp_path)
+    assert first.subjects == tuple(cycles.names[:3]) and first.displacement.shape[1] == 4
+    seqs[cycles.names[1]] = cycles.frames[1][1::5]  # changed frames: computed again
+    again = run_cycle_study(atlas, faces, seqs, tmp_path, **FAST)
+    assert again.computed == [cycles.names[1]]
+    assert sorted(again.reused) == sorted([cycles.names[0], cycles.names[2]])
+    other = run_cycle_study(atlas, faces, seqs, tmp_path, alpha2=10.0, **FAST)  # new settings
+    assert len(other.computed) == 3 and not other.reused
+
+
+def test_curve_peaks_recovers_a_peak_between_frames():
+    n = 25
+    t = np.arange(n) / n
+    true_time = np.array([0.3, 0.333, 0.37, 0.95])  # the last wraps around the cycle
+    amplitude = np.array([8.0, 5.0, 2.0, 3.0])
+    d = (t[:, None] - true_time[None] + 0.5) % 1.0 - 0.5
+    curves = -amplitude * np.exp(-0.5 * (d / 0.08) ** 2)  # inward (negative), periodic
+    peak, time = curve_peaks(curves)
+    step = 1.0 / n
+    assert np.all(np.abs(((time - true_time + 0.5) % 1.0) - 0.5) < 0.1 * step)
+    assert np.allclose(peak, amplitude, rtol=0.02)
+    on_grid = np.abs(((np.round(true_time * n) / n - true_time + 0.5) % 1.0) - 0.5)
+    assert on_grid.max() > 0.3 * step  # the refinement is what gets within 0.1 step
+    with pytest.raises(ValueError, match="fractions: expected 25 evenly spaced"):
+        curve_peaks(curves, fractions=np.linspace(0, 1, n))
+
+
+def _corresponded_motion(c) -> CycleMotion:
+    """The cohort's own motion without transport (every subject on its own anatomy)."""
+    return CycleMotion(c.names, c.frames - c.frames[:, :1], c.data.cohort.atlas, c.faces)
+
+
+def test_the_cycle_tests_find_the_planted_region_and_nothing_under_the_null(tmp_path):
+    c = make_two_group_cycles(n_subjects=24, n_frames=12, n_vertices=300, seed=4)
+    motion = _corresponded_motion(c)
+    rng = np.random.default_rng(0)
+    tests = compare_cycles(motion, c.patients, 1000, rng)
+    region = c.data.region.weight > 0
+    found = tests.peak.p_fwer < 0.05
+    assert found.sum() >= 0.3 * region.sum()
+    assert (found & ~region).sum() <= 0.02 * len(region)
+    assert tests.peak.statistic[found].max() < 0  # patients move less inward: lower peak
+    frames_found = (tests.per_frame.p_fwer < 0.05).any(axis=1)
+    assert not frames_found[0] and frames_found[ES_FRAME * 12 // N_FRAMES]
+    controls = np.flatnonzero(~c.patients)
+    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
+                       motion.atlas, motion.faces)  # fmt: skip
+    null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000, rng)
+    assert (null_tests.peak.p_fwer < 0.05).sum() <= 0.01 * len(region)
+    paths = write_cycle_tests(tmp_path, motion, tests, ("patients", "controls"))
+    assert all(p.is_file() and p.stat().st_size > 0 for p in paths)
+    rows = list(csv.DictReader(open(tmp_path / "cycle_vertices.csv")))
+    assert len(rows) == len(region)
+    assert int(rows[int(np.argmin(tests.peak.p_fwer))]["vertex"]) >= 0
+
+
+def test_groups_must_name_every_subject(cycles):
+    motion = _corresponded_motion(cycles)
+    with pytest.raises(CohortError, match="no group for subject"):
+        compare_cycles(motion, {cycles.names[0]: True}, 10, np.random.default_rng(0))
+
+
+def test_tracked_folder_layout_is_checked(tmp_path, cycles):
+    faces = cycles.faces
+    (tmp_path / "a").mkdir()
+    for t in (0, 1, 3):
+        write_mesh(tmp_path / "a" / f"frame_{t:02d}.vtk", cycles.frames[0][t], faces)
+    with pytest.raises(CohortError, match=r"a: frame\(s\) \[2\] missing"):
+        read_tracked_frames(tmp_path)
+    write_mesh(tmp_path / "a" / "frame_02.vtk", cycles.frames[0][2], faces)
+    write_mesh(tmp_path / "a" / "frame_2.ply", cycles.frames[0][2], faces)
+    with pytest.raises(CohortError, match="frame 2 given twice"):
+        read_tracked_frames(tmp_path)
+
+
+def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
+    atlas, faces = cycles.data.cohort.atlas, cycles.faces
+    write_mesh(tmp_path / "atlas.vtk", atlas, faces)
+    groups = ["subject,group"]
+    for i, name in enumerate(cycles.names):
+        (tmp_path / "tracked" / name).mkdir(parents=True)
+        for t in range(0, N_FRAMES, 5):
+            write_mesh(tmp_path / "tracked" / name / f"frame_{t // 5:02d}.vtk",
+                       cycles.frames[i][t], faces)  # fmt: skip
+        groups.append(f"{name},{'patients' if cycles.patients[i] else 'controls'}")
+    (tmp_path / "groups.csv").write_text("\n".join(groups) + "\n")
+    study = tmp_path / "study"
+    argv = ["cycle-study", str(tmp_path / "tracked"), "--atlas", str(tmp_path / "atlas.vtk"),
+            "-o", str(study), "--sigma", "20", "--jobs", "1", "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    assert "6 transported" in capsys.readouterr().out
+    assert main(argv) == 0 and "6 already done" in capsys.readouterr().out
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--permutations", "200"]) == 0  # fmt: skip
+    assert "vertices found at FWER 5 %" in capsys.readouterr().out
+    assert (study / "analysis" / "cycle_tests.vtu").is_file()
+    (tmp_path / "bad.csv").write_text("subject,group\n" + f"{cycles.names[0]},a\n")
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "bad.csv")]) == 2
+    assert "no group for" in capsys.readouterr().err
+
+
+def test_the_ideal_cycle_transport_is_the_ideal_transport_at_end_systole(cycles):
+    from ladders.study.population import ideal_cycle_transport, ideal_transport
+
+    ideal = ideal_cycle_transport(cycles)
+    assert ideal.shape == cycles.frames.shape
+    assert np.all(ideal[:, 0] == 0)
+    es = ideal_transport(cycles.data)
+    assert np.abs(ideal[:, ES_FRAME] - es).max() < 1e-9 * np.abs(es).max()
+    # a subject's own motion on its own anatomy differs from it on the atlas's
+    own = cycles.frames - cycles.frames[:, :1]
+    assert np.linalg.norm(own[:, ES_FRAME] - es, axis=-1).mean() > 0.5
+    with pytest.raises(CohortError, match="expected a CohortCycles"):
+        ideal_cycle_transport(cycles.data)
