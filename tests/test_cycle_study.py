@@ -180,6 +180,10 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
     (tmp_path / "bad.csv").write_text("subject,group\n" + f"{cycles.names[0]},a\n")
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "bad.csv")]) == 2
     assert "no group for" in capsys.readouterr().err
+    (tmp_path / "small.csv").write_text("subject,group\n" + "".join(
+        f"{n},{'a' if i < 2 else 'b'}\n" for i, n in enumerate(cycles.names)))  # fmt: skip
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "small.csv")]) == 2
+    assert "at least 3 subjects" in capsys.readouterr().err
 
 
 def test_the_ideal_cycle_transport_is_the_ideal_transport_at_end_systole(cycles):

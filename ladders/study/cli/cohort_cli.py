@@ -10,6 +10,8 @@ option (``--imbalance``, ``--age-effect``, ``--sex-effect``, ``--body-size-sd``,
 ``--design``), it wraps :func:`~ladders.study.population.make_covariate_cohort` and
 :func:`~ladders.study.population.write_covariate_cohort` instead, which also write
 ``design.csv`` (subject, group, age, sex, body_size) for ``symladders analyze --design``.
+With ``--cycle N`` it writes the cohort through the whole cycle instead, with every
+subject's 4-D label or cine series (:mod:`.cohort_cycle_cli`).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 
 from .cli_types import DefaultsFormatter, UsageError, nonnegative_int, output_folder, positive_int
+from .cohort_cycle_cli import add_cycle_arguments, run_cycle_cohort
 
 __all__ = ["add_cohort_parser", "run_cohort_command"]
 
@@ -182,6 +185,7 @@ def add_cohort_parser(sub) -> None:
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk",
                    help="mesh format")  # fmt: skip
+    add_cycle_arguments(p)
     p.set_defaults(run=run_cohort_command, output_is_file=False)
 
 
@@ -264,6 +268,8 @@ def run_cohort_command(args) -> int:
         )
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
+    if args.cycle is not None:
+        return run_cycle_cohort(args, abnormality)
     if _several_groups(args):
         return _run_covariate_cohort(args, abnormality)
     data = make_two_group_cohort(

@@ -88,9 +88,12 @@ def run_cycle_study_command(args) -> int:
     atlas, faces = read_mesh(args.atlas)
     sequences = read_tracked_frames(args.frames)
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
-    outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
-                              deformation=args.deformation, jobs=args.jobs,
-                              progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
+    try:
+        outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
+                                  deformation=args.deformation, jobs=args.jobs,
+                                  progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
+    except ValueError as exc:  # a bad atlas
+        raise UsageError(f"symladders cycle-study: error: {exc}") from None
     print(
         f"symladders cycle-study: {len(sequences)} subject(s): {len(outcome.computed)} "
         f"transported, {len(outcome.reused)} already done, {len(outcome.failures)} failed, in "
@@ -132,7 +135,10 @@ def run_cycle_analyze_command(args) -> int:
         keep = [i for i, s in enumerate(motion.subjects) if s in labels]
         motion = type(motion)(tuple(motion.subjects[i] for i in keep),
                               motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
-    tests = compare_cycles(motion, labels, args.permutations, np.random.default_rng(args.seed))
+    try:
+        tests = compare_cycles(motion, labels, args.permutations, np.random.default_rng(args.seed))
+    except ValueError as exc:  # e.g. a group of fewer than 3 subjects
+        raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
     output = Path(args.output) if args.output else Path(args.study) / "analysis"
     write_cycle_tests(output, motion, tests, names)
     found = (tests.peak.p_fwer < 0.05).sum(), (tests.time_to_peak.p_fwer < 0.05).sum()

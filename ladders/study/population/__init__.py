@@ -3,7 +3,8 @@
 - :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
   motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
   :mod:`.cycle_cohort`: its whole cardiac cycle, every subject's frames and images
-  (:func:`make_two_group_cycles`, :func:`two_group_cycles`);
+  (:func:`make_two_group_cycles`, :func:`two_group_cycles`), written as 4-D label or cine
+  images with :func:`write_cycle_cohort` (:mod:`.cycle_images`);
 - :mod:`.covariate_cohort`: the synthetic cohort in several groups (planted abnormalities,
   anatomy shifts) with age, sex and body size acting on the shapes, and its design table
   (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`); :mod:`.ideal_transport`:
@@ -63,6 +64,7 @@ from .cycle_cohort import (
     make_two_group_cycles,
     two_group_cycles,
 )
+from .cycle_images import IMAGE_KINDS, cycle_grid, write_cycle_cohort
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
 from .ideal_transport import (
     MOTION_PARAMETERS,
@@ -144,6 +146,9 @@ __all__ = [
     "CYCLE_ABNORMALITY",
     "CohortCycles",
     "make_two_group_cycles",
+    "IMAGE_KINDS",
+    "cycle_grid",
+    "write_cycle_cohort",
     "two_group_cycles",
     "AnatomyShift",
     "CohortGroup",

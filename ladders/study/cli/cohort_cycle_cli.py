@@ -1,0 +1,100 @@
+"""``symladders cohort --cycle N``: the two-group cohort through the whole cycle, as images.
+
+A thin wrapper of :func:`~ladders.study.population.make_two_group_cycles` and
+:func:`~ladders.study.population.write_cycle_cohort`: besides the ED/ES meshes,
+``groups.csv`` and ``planted_region.json`` of ``symladders cohort``, every subject's
+4-D label (or cine) series in ``images/`` and its true frames in ``frames/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from .cli_types import UsageError
+
+__all__ = ["add_cycle_arguments", "run_cycle_cohort"]
+
+#: Options of the ED/ES cohort that the whole-cycle cohort does not take.
+_EXCLUSIVE = ("noise", "remesh", "pose", "group", "anatomy", "imbalance", "age_effect",
+              "sex_effect", "body_size_sd")  # fmt: skip
+
+
+def _voxel(text: str) -> tuple[float, float]:
+    try:
+        in_plane, thickness = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected IN_PLANE,THICKNESS in mm (e.g. 1.5,8), got {text!r}"
+        ) from None
+    if not (0 < in_plane < 100 and 0 < thickness < 100):
+        raise argparse.ArgumentTypeError(f"expected voxel sizes in (0, 100) mm, got {text!r}")
+    return in_plane, thickness
+
+
+def _frames(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a number of frames >= 3, got {text!r}"
+        ) from None
+    if n < 3:
+        raise argparse.ArgumentTypeError(f"expected a number of frames >= 3, got {text!r}")
+    return n
+
+
+def add_cycle_arguments(p) -> None:
+    """The ``--cycle`` group of ``symladders cohort``."""
+    g = p.add_argument_group(
+        "the whole cycle",
+        "with --cycle, also every subject's 4-D series in images/ (frame 0 at ED) and its "
+        "true frames in frames/<subject>/frame_<kk>.vtk; the planted abnormality acts "
+        "through the whole cycle",
+    )
+    g.add_argument("--cycle", type=_frames, default=None, metavar="FRAMES",
+                   help="frames per cycle (e.g. 25; ES at 35 %% of the cycle)")  # fmt: skip
+    g.add_argument("--images", choices=("labels", "cine", "none"), default="labels",
+                   help="with --cycle: label series (0, 1 blood pool, 2 myocardium) or cine "
+                        "intensities")  # fmt: skip
+    g.add_argument("--voxel", type=_voxel, default=(1.5, 8.0), metavar="IN_PLANE,THICKNESS",
+                   help="with --cycle: voxel size of the short-axis stacks, mm")  # fmt: skip
+    g.add_argument("--tagging", action="store_true",
+                   help="with --images cine: tagging lines 7 mm apart, moving with the wall")  # fmt: skip
+
+
+def run_cycle_cohort(args, abnormality) -> int:
+    """Write the whole-cycle cohort from parsed arguments."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from ..errors import CohortError
+    from ..imaging.cine import TagGrid
+    from ..population import make_two_group_cycles, write_cycle_cohort
+
+    given = [o for o in _EXCLUSIVE if getattr(args, o, None) not in (None, False, 0.0)]
+    if given or args.design or args.landmarks:
+        flag = "--" + (given[0] if given else "design" if args.design else "landmarks")
+        raise UsageError(f"symladders cohort: error: {flag.replace('_', '-')}: not with --cycle")
+    if args.tagging and args.images != "cine":
+        raise UsageError("symladders cohort: error: --tagging: only with --images cine")
+    if abnormality is not None:  # transitions wide enough for the motion to stay invertible
+        abnormality = replace(abnormality, transition_height=0.1)
+    try:
+        cycles = make_two_group_cycles(args.subjects, abnormality, args.cycle, 0.35,
+                                       args.vertices, args.seed, args.patients)  # fmt: skip
+        folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
+                                    tagging=TagGrid() if args.tagging else None)  # fmt: skip
+    except CohortError as exc:
+        raise UsageError(f"symladders cohort: error: {exc}") from None
+    n_patients = int(cycles.patients.sum())
+    print(f"symladders cohort: {len(cycles.names)} subjects ({n_patients} patients, "
+          f"{len(cycles.names) - n_patients} controls) through {args.cycle} frames, "
+          f"{cycles.frames.shape[2]} vertices, in {folder}")  # fmt: skip
+    if abnormality is not None:
+        region = cycles.data.region
+        print(f"planted: {abnormality.describe()}; {int(region.affected.sum())} of "
+              f"{region.weight.size} atlas vertices affected")  # fmt: skip
+    what = "no images" if args.images == "none" else f"{args.images}: {folder / 'images'}"
+    print(f"{what}; true frames: {folder / 'frames'}; groups: {folder / 'groups.csv'}; "
+          f"truth: {folder / 'planted_region.json'}, {folder / 'cycle.json'}")  # fmt: skip
+    return 0

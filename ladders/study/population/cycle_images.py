@@ -1,0 +1,129 @@
+"""The whole-cycle cohort on disk: 4-D label or cine images, the frames as meshes, the truth.
+
+:func:`write_cycle_cohort` writes what a cardiac pipeline starts from, for a cohort of
+:func:`~ladders.study.population.make_two_group_cycles`::
+
+    <folder>/atlas.vtk, <subject>_ed.vtk, <subject>_es.vtk, groups.csv,
+    planted_region.json           as write_two_group_cohort (the ES frame's surfaces)
+    <folder>/images/<subject>.nii.gz
+                                  the subject's 4-D series (frames on the fourth axis,
+                                  frame 0 at ED): labels (0 background, 1 blood pool,
+                                  2 myocardium) or cine intensities (noise, partial
+                                  volume, optionally tagging)
+    <folder>/frames/<subject>/frame_<kk>.vtk
+                                  the true surfaces of every frame, in the atlas's
+                                  correspondence (what ``symladders track`` estimates)
+    <folder>/cycle.json           frames, ES frame, the grid and what was rendered
+
+The images are short-axis stacks (slices along the long axis) over each subject's
+own field of view: its ED surface with a margin of 15 mm (8 mm above the base).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CohortError
+from ..imaging.cine import TagGrid, write_series
+from ..imaging.voxelize import short_axis_affine
+from ..meshes.mesh_io import write_mesh
+from .two_groups import write_two_group_cohort
+
+__all__ = ["IMAGE_KINDS", "cycle_grid", "write_cycle_cohort"]
+
+#: What :func:`write_cycle_cohort` renders into ``images/``.
+IMAGE_KINDS = ("labels", "cine", "none")
+_MARGIN, _ABOVE_BASE = 15.0, 8.0
+
+
+def cycle_grid(ed, in_plane: float = 1.5, thickness: float = 8.0) -> tuple[np.ndarray, tuple]:
+    """The affine ``(4, 4)`` and shape of a short-axis stack over an ED surface ``(k, 3)``."""
+    for name, value in (("in_plane", in_plane), ("thickness", thickness)):
+        if not (np.isfinite(value) and value > 0):
+            raise CohortError(f"{name}: expected a voxel size > 0 mm, got {value!r}")
+    ed = np.asarray(ed, dtype=float)
+    low = ed.min(axis=0) - _MARGIN
+    high = ed.max(axis=0) + np.array([_MARGIN, _MARGIN, _ABOVE_BASE])
+    spacing = np.array([in_plane, in_plane, thickness])
+    shape = tuple(int(n) for n in np.ceil((high - low) / spacing))
+    return short_axis_affine(low, in_plane, thickness), shape
+
+
+def write_cycle_cohort(
+    cycles,
+    folder,
+    images: str = "labels",
+    in_plane: float = 1.5,
+    thickness: float = 8.0,
+    tagging: TagGrid | None = None,
+    noise: float = 0.05,
+    rng: np.random.Generator | None = None,
+    frames: bool = True,
+) -> Path:
+    """Write a whole-cycle cohort's images, frames and truth into ``folder`` (see the module).
+
+    Parameters
+    ----------
+    cycles : CohortCycles
+        From :func:`~ladders.study.population.make_two_group_cycles`.
+    folder : path
+    images : {"labels", "cine", "none"}
+    in_plane, thickness : float
+        Voxel size of the short-axis stacks, mm.
+    tagging : TagGrid, optional
+        Cine only: tagging lines that move with the material.
+    noise : float, default 0.05
+        Cine only: the noise's standard deviation (the myocardium's intensity is 1).
+    rng : numpy.random.Generator, optional
+        Cine only: the noise (default: seeded by the cohort's seed).
+    frames : bool, default True
+        Also write every frame's true surface.
+
+    Returns
+    -------
+    Path
+    """
+    if images not in IMAGE_KINDS:
+        raise CohortError(f"images: expected one of {IMAGE_KINDS}, got {images!r}")
+    if images != "cine" and tagging is not None:
+        raise CohortError("tagging: only with images='cine'")
+    data = getattr(cycles, "data", None)
+    if data is None or not hasattr(cycles, "render_labels"):
+        raise CohortError(f"cycles: expected a CohortCycles, got {type(cycles).__name__}")
+    folder = write_two_group_cohort(data, folder)
+    if images != "none":
+        cycles.check_invertible()  # a folded motion cannot be rendered: say which subject
+    if rng is None:
+        rng = np.random.default_rng([int(getattr(data, "seed", 0)), 3])
+    grids = {}
+    for i, name in enumerate(cycles.names):
+        affine, shape = cycle_grid(cycles.frames[i, 0], in_plane, thickness)
+        grids[name] = {"affine": affine.tolist(), "shape": list(shape)}
+        if images == "labels":
+            series = [cycles.render_labels(i, affine, shape, t) for t in range(len(cycles.times))]
+        elif images == "cine":
+            series = [cycles.render_cine(i, affine, shape, t, rng, noise=noise, tagging=tagging)
+                      for t in range(len(cycles.times))]  # fmt: skip
+        if images != "none":
+            write_series(folder / "images" / f"{name}.nii.gz", series, affine)
+        if frames:
+            (folder / "frames" / name).mkdir(parents=True, exist_ok=True)
+            for t, surface in enumerate(cycles.frames[i]):
+                write_mesh(folder / "frames" / name / f"frame_{t:02d}.vtk", surface, cycles.faces)
+    es = int(np.argmax(cycles.fractions))
+    record = {
+        "n_frames": len(cycles.times),
+        "es_frame": es,
+        "fractions": [float(f) for f in cycles.fractions],
+        "images": images,
+        "voxel_mm": [in_plane, in_plane, thickness],
+        "tagging": None if tagging is None else vars(tagging),
+        "noise": noise if images == "cine" else None,
+        "labels": {"background": 0, "blood_pool": 1, "myocardium": 2},
+        "grids": grids,
+    }
+    (folder / "cycle.json").write_text(json.dumps(record, indent=1), encoding="utf-8")
+    return folder

@@ -1,0 +1,78 @@
+"""The whole-cycle cohort written as 4-D label and cine series, its frames and its truth."""
+
+from __future__ import annotations
+
+import json
+
+import nibabel as nib
+import numpy as np
+import pytest
+
+from ladders.study.cli import main
+from ladders.study.errors import CohortError
+from ladders.study.imaging import extract_surface
+from ladders.study.imaging.label_images import read_label_series
+from ladders.study.meshes.mesh_io import read_mesh
+from ladders.study.population import cycle_grid, make_two_group_cycles, write_cycle_cohort
+from ladders.study.preparation.surface_distance import distances_to_surface
+from ladders.study.sequences import read_tracked_frames
+
+
+@pytest.fixture(scope="module")
+def cycles():
+    return make_two_group_cycles(n_subjects=6, n_frames=6, n_vertices=241, seed=3)
+
+
+def test_label_series_render_the_true_frames(cycles, tmp_path):
+    folder = write_cycle_cohort(cycles, tmp_path, "labels", 1.5, 4.0)
+    record = json.loads((folder / "cycle.json").read_text())
+    assert record["n_frames"] == 6 and record["es_frame"] == int(np.argmax(cycles.fractions))
+    frames = read_tracked_frames(folder / "frames")
+    assert list(frames) == list(cycles.names)
+    name = cycles.names[1]
+    series = read_label_series(folder / "images" / f"{name}.nii.gz")
+    assert len(series) == 6
+    affine, shape = cycle_grid(cycles.frames[1, 0], 1.5, 4.0)
+    assert np.allclose(series[0].affine, affine) and series[0].labels.shape == shape
+    for t in (0, record["es_frame"]):
+        truth, _ = read_mesh(frames[name][t])
+        assert np.allclose(truth, cycles.frames[1, t], atol=1e-6)
+        vertices, faces, _ = extract_surface(series[t], 1)
+        d = distances_to_surface(truth, vertices, faces)
+        assert np.median(d) < 1.0  # mm, on a 1.5 x 1.5 x 4 mm grid
+    volumes = [np.count_nonzero(s.labels == 1) for s in series]
+    assert np.argmin(volumes) == record["es_frame"]  # the cavity is smallest at ES
+
+
+def test_cine_series_are_intensities_with_tagging(cycles, tmp_path):
+    from ladders.study.imaging.cine import TagGrid
+
+    small = make_two_group_cycles(n_subjects=2, n_frames=3, n_vertices=241, seed=3)
+    folder = write_cycle_cohort(small, tmp_path, "cine", 3.0, 8.0, tagging=TagGrid(),
+                                rng=np.random.default_rng(0), frames=False)  # fmt: skip
+    img = nib.load(str(folder / "images" / f"{small.names[0]}.nii.gz"))
+    data = np.asarray(img.dataobj)
+    assert data.dtype == np.float32 and data.shape[-1] == 3
+    labels = np.asarray(small.render_labels(0, img.affine, data.shape[:3], 0))
+    blood, wall = (np.median(data[..., 0][labels == k]) for k in (1, 2))
+    assert blood > 2.5 * wall  # bright blood against a dark myocardium, tags and noise aside
+    assert not (folder / "frames").exists()
+    with pytest.raises(CohortError, match="tagging: only with images='cine'"):
+        write_cycle_cohort(cycles, tmp_path / "x", "labels", tagging=TagGrid())
+    with pytest.raises(CohortError, match="images: expected one of"):
+        write_cycle_cohort(cycles, tmp_path / "x", "movie")
+
+
+def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, capsys):
+    out = tmp_path / "cohort"
+    argv = ["cohort", "--cycle", "5", "--subjects", "6", "--vertices", "241", "-o", str(out)]
+    assert main(argv + ["--voxel", "2,6"]) == 0
+    text = capsys.readouterr().out
+    assert "through 5 frames" in text and "planted: hypokinesia" in text
+    assert len(list((out / "images").glob("*.nii.gz"))) == 6
+    assert json.loads((out / "cycle.json").read_text())["voxel_mm"] == [2.0, 2.0, 6.0]
+    for extra, message in ((["--pose"], "--pose: not with --cycle"),
+                           (["--tagging"], "--tagging: only with --images cine"),
+                           (["--voxel", "2"], "expected IN_PLANE,THICKNESS")):  # fmt: skip
+        assert main(argv + extra) == 2
+        assert message in capsys.readouterr().err
