@@ -53,3 +53,19 @@ def test_done_items_are_reused_without_running_and_come_first(tmp_path):
     assert list(run_batch(square_and_record, tasks, reuse=lambda i, f: everything[i])) == [
         ("stored", i) for i in range(5)
     ]
+
+
+def read_relative(path):
+    """A work function given a path relative to the caller's folder."""
+    with open(path, encoding="utf-8") as fh:
+        return fh.read()
+
+
+def test_relative_paths_mean_the_callers_folder_even_in_reused_workers(tmp_path, monkeypatch):
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "item.txt").write_text(name)
+    monkeypatch.chdir(tmp_path / "a")
+    assert list(run_batch(read_relative, [("item.txt",)] * 4, jobs=2)) == ["a"] * 4
+    monkeypatch.chdir(tmp_path / "b")  # the same worker processes are reused
+    assert list(run_batch(read_relative, [("item.txt",)] * 4, jobs=2)) == ["b"] * 4

@@ -11,11 +11,14 @@ functions record their own failures (a failing item returns a record saying why 
 never stops the others). Threads: a lone run lets the compiled kernel sums use every
 core; several workers share the cores (:func:`~manifolds.kernels.threads_per_worker`),
 and BLAS runs on one thread in every case, so that an item's numbers do not depend on
-``jobs``.
+``jobs``. Every item runs in the caller's current folder (a worker kept from an earlier
+batch changes to it first), so that relative paths in the tasks mean what they mean to
+the caller.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Iterator
 
 from manifolds.kernels import kernel_threads, threads_per_worker
@@ -24,7 +27,9 @@ from manifolds.numerics.solvers import limit_blas_threads
 __all__ = ["run_batch"]
 
 
-def _call(work: Callable, threads: int | None, task: tuple):
+def _call(work: Callable, threads: int | None, task: tuple, cwd: str | None = None):
+    if cwd is not None and os.getcwd() != cwd:  # a reused worker: the caller's folder
+        os.chdir(cwd)
     with kernel_threads(threads), limit_blas_threads(1):
         return work(*task)
 
@@ -84,7 +89,8 @@ def run_batch(
         threads = threads_per_worker(jobs)
         kind = "generator" if ordered else "generator_unordered"
         runner = Parallel(n_jobs=jobs, return_as=kind)
-        for result in runner(delayed(_call)(work, threads, task) for task in pending):
+        cwd = os.getcwd()  # relative paths in the tasks mean the caller's folder
+        for result in runner(delayed(_call)(work, threads, task, cwd) for task in pending):
             bar.update(1)
             if callable(progress):
                 progress(result)

@@ -1,0 +1,232 @@
+"""The whole cycle through label series, against the truth: tracking error and group tests.
+
+    python benchmarks/bench_cycle_routes.py --work symladders-output/bench_cycle_routes
+    python benchmarks/bench_cycle_routes.py --publish     # docs/generated/cycle_routes.md
+    python benchmarks/bench_cycle_routes.py --quick       # 12 subjects, 10 frames
+
+The route a user runs from 4-D label images, with the library's functions (the commands
+of ``docs/tutorial_cycle.md``): the whole-cycle cohort
+(:func:`~ladders.study.population.make_two_group_cycles`, seed 0, 20 patients against
+20 controls, 25 frames) written as short-axis label series of 1.5 x 1.5 x 8 mm
+(:func:`~ladders.study.population.write_cycle_cohort`); the ED frame meshed
+(:func:`~ladders.study.imaging.mesh_label_images`) and put in the atlas's
+correspondence (:func:`~ladders.study.preparation.correspond_cohort`); the mesh
+tracked through every frame (:func:`~ladders.study.tracking.track_cohort`, projection
+with ``refine_ed``); the frames transported (:func:`~ladders.study.sequences.run_cycle_study`,
+pole ladder with residuals, ``alpha^2 = 100``) or not. Cohorts: the whole-cycle
+hypokinesia at a fifth of the motion (the mild effect) and at half of it.
+
+Measured per cohort:
+
+* tracking: the error at ES of every tracked vertex against the true position of the
+  material point it started from (the model's motion in the volume applied to the
+  tracked ED vertex), split along the true surface's normal and along the wall; the
+  same at the last frame (drift); seconds per subject (meshing and tracking);
+* the peak test (:func:`~ladders.study.sequences.compare_cycles`): power and Dice
+  against the planted region, FWER 5 %, and its null FWER from random 10-against-10
+  splits of the controls, with a binomial interval; beside the same tests on the
+  true frames (the meshes in correspondence).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_cycle_study import _null_rate  # noqa: E402
+from generated_tables import machine, publish  # noqa: E402
+
+from ladders.statistics import detection_power, dice  # noqa: E402
+from ladders.study.cohort import motion_forward  # noqa: E402
+from ladders.study.imaging import mesh_label_images  # noqa: E402
+from ladders.study.meshes.mesh_io import read_mesh  # noqa: E402
+from ladders.study.population import (  # noqa: E402
+    CYCLE_ABNORMALITY,
+    make_two_group_cycles,
+    write_cycle_cohort,
+)
+from ladders.study.preparation import correspond_cohort  # noqa: E402
+from ladders.study.sequences import (  # noqa: E402
+    CycleMotion,
+    compare_cycles,
+    load_cycle_motion,
+    read_tracked_frames,
+    run_cycle_study,
+)
+from ladders.study.tracking import TrackingSettings, track_cohort  # noqa: E402
+from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
+
+COHORTS = {"hypokinesia_mild": replace(CYCLE_ABNORMALITY, magnitude=0.2),
+           "hypokinesia": CYCLE_ABNORMALITY}  # fmt: skip
+ALPHA2 = 100.0
+
+
+def _cycles(name, n, n_frames):
+    return make_two_group_cycles(n_subjects=n, abnormality=COHORTS[name], n_frames=n_frames)
+
+
+def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int) -> dict:
+    """Every stage of the label route (each resumes); the seconds of each."""
+    c = _cycles(name, n, n_frames)
+    root = work / name
+    seconds = {}
+    start = time.perf_counter()
+    if not (root / "cohort" / "cycle.json").is_file():
+        write_cycle_cohort(c, root / "cohort", "labels", 1.5, 8.0)
+    seconds["render"] = time.perf_counter() - start
+    images = sorted((root / "cohort" / "images").glob("*.nii.gz"))
+    es = int(np.argmax(c.fractions))
+    for stage, call in (
+        ("mesh", lambda: mesh_label_images(images, 1, root / "meshes", (0, es), jobs=jobs,
+                                           progress=False)),
+        ("correspond", lambda: correspond_cohort(root / "cohort" / "atlas.vtk", root / "meshes",
+                                                 root / "corresponded", jobs=jobs)),
+        ("track", lambda: track_cohort(root / "corresponded", root / "cohort" / "images",
+                                       root / "tracked", 1, TrackingSettings(refine_ed=True),
+                                       jobs=jobs, progress=False)),
+    ):  # fmt: skip
+        start = time.perf_counter()
+        call()
+        seconds[stage] = time.perf_counter() - start
+        print(f"  {name}: {stage} {seconds[stage]:.0f} s", flush=True)
+    atlas, faces = read_mesh(root / "cohort" / "atlas.vtk")
+    sequences = read_tracked_frames(root / "tracked")
+    start = time.perf_counter()
+    run_cycle_study(atlas, faces, sequences, root / "cycle_study", alpha2=ALPHA2, jobs=jobs)
+    seconds["cycle_study"] = time.perf_counter() - start
+    print(f"  {name}: cycle study {seconds['cycle_study']:.0f} s", flush=True)
+    return seconds
+
+
+def _tracked(root: Path, c):
+    """Tracked frames ``(n, T, k, 3)`` in the atlas's frame and each subject's transform."""
+    sequences = read_tracked_frames(root / "tracked")
+    names = [s for s in c.names if s in sequences]
+    frames = np.stack([[read_mesh(p)[0] for p in sequences[s]] for s in names])
+    matrices = []
+    for s in names:
+        record = json.loads((root / "corresponded" / "correspondence" / f"{s}.json").read_text())
+        matrices.append(np.asarray(record["transform"]["matrix"]))
+    return names, frames, matrices
+
+
+def _tracking_error(c, names, frames, matrices, faces):
+    """Mean normal and tangential error at ES and the mean error at the last frame, mm."""
+    es = int(np.argmax(c.fractions))
+    normal, tangential, last = [], [], []
+    for name, tracked, m in zip(names, frames, matrices):
+        i = c.names.index(name)
+        params, abnormality = c.motion_of(i)
+        inverse = np.linalg.inv(m)
+        start = tracked[0] @ inverse[:3, :3].T + inverse[:3, 3]  # the subject's own frame
+
+        truth = {}
+        for t in (es, len(c.fractions) - 1):
+            moved = motion_forward(params, start, float(c.fractions[t]), abnormality)
+            truth[t] = moved @ m[:3, :3].T + m[:3, 3]
+        error = tracked[es] - truth[es]
+        nu = outward_vertex_normals(truth[es], faces)
+        along = np.einsum("kd,kd->k", error, nu)
+        normal.append(np.abs(along).mean())
+        tangential.append(np.linalg.norm(error - along[:, None] * nu, axis=1).mean())
+        last.append(np.linalg.norm(tracked[-1] - truth[len(c.fractions) - 1], axis=1).mean())
+    return float(np.mean(normal)), float(np.mean(tangential)), float(np.mean(last))
+
+
+def _scores(motion, c, region, permutations, repetitions, rng):
+    patients = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
+    tests = compare_cycles(motion, patients, permutations, rng)
+    found = tests.peak.p_fwer < 0.05
+    rate = _null_rate(motion, np.flatnonzero(~patients), rng, repetitions, min(permutations, 500))
+    return detection_power(found, region), dice(found, region), rate
+
+
+def rows(work: Path, n: int, n_frames: int, seconds: dict, permutations, repetitions, rng):
+    out = []
+    for name in COHORTS:
+        root = work / name
+        if not (root / "tracked").is_dir():
+            continue
+        c = _cycles(name, n, n_frames)
+        atlas, faces = read_mesh(root / "cohort" / "atlas.vtk")
+        region = c.data.region.affected
+        names, frames, matrices = _tracked(root, c)
+        error = _tracking_error(c, names, frames, matrices, faces)
+        per_subject = {k: v / max(len(names), 1) for k, v in seconds.get(name, {}).items()}
+        true = CycleMotion(c.names, c.frames - c.frames[:, :1], atlas, faces)
+        motions = [("true frames (meshes in correspondence), no transport", true, None),
+                   ("label series, tracked, no transport",
+                    CycleMotion(tuple(names), frames - frames[:, :1], atlas, faces), error)]  # fmt: skip
+        if (root / "cycle_study" / "cycle_study.json").is_file():
+            motions.append((f"label series, tracked, pole ladder alpha^2 = {ALPHA2:g}",
+                            load_cycle_motion(root / "cycle_study"), error))  # fmt: skip
+        for label, motion, err in motions:
+            power, d, rate = _scores(motion, c, region, permutations, repetitions, rng)
+            out.append((name, label, len(motion.subjects), err, per_subject, power, d, rate))
+            print(out[-1], flush=True)
+    return out
+
+
+def _table(rows, n_frames, permutations, repetitions) -> str:
+    lines = [
+        "| cohort | motion | subjects | ES error normal / along the wall (mm) | last-frame error "
+        "(mm) | peak test: power / Dice | null FWER [95 % CI] | s / subject: meshing ED-ES + "
+        "correspondence, tracking, cycle study |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for name, label, n, err, sec, power, d, (rate, low, high) in rows:
+        e = "truth" if err is None else f"{err[0]:.2f} / {err[1]:.2f}"
+        last = "truth" if err is None else f"{err[2]:.2f}"
+        s = "" if err is None or not sec else (
+            f"{sec.get('mesh', 0) + sec.get('correspond', 0):.0f}, {sec.get('track', 0):.0f}, "
+            f"{sec.get('cycle_study', 0):.0f}")  # fmt: skip
+        lines.append(f"| {name} | {label} | {n} | {e} | {last} | {power:.2f} / {d:.2f} | "
+                     f"{rate:.2f} [{low:.2f}, {high:.2f}] | {s} |")  # fmt: skip
+    sizes = {"hypokinesia_mild": "a fifth of the motion (mild)", "hypokinesia": "half the motion"}
+    cohorts = " and ".join(sizes[c] for c in dict.fromkeys(r[0] for r in rows))
+    note = (
+        f"Synthetic subjects through {n_frames} frames (ES at 35 %), short-axis label series "
+        "of 1.5 x 1.5 x 8 mm; tracking by projection with refine_ed; whole-cycle hypokinesia "
+        f"of segments 7, 8, 13, 14 at {cohorts}. {permutations:,} "
+        f"permutations, FWER 5 %; null: {repetitions} random splits of the controls. Seconds "
+        "per subject: a stage's wall-clock time over the subjects, 2 subjects at a time on "
+        "the 2 cores (throughput), from the run that computed the stage."
+    )
+    return note + "\n\n" + "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--work", type=Path, default=Path("symladders-output/bench_cycle_routes"))
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--cohorts", nargs="+", choices=tuple(COHORTS), default=list(COHORTS))
+    parser.add_argument("--publish", action="store_true")
+    args = parser.parse_args(argv)
+    print(machine(), flush=True)
+    n, n_frames = (12, 10) if args.quick else (40, 25)
+    permutations, repetitions = (500, 10) if args.quick else (5000, 100)
+    seconds_file = args.work / "seconds.json"
+    seconds = json.loads(seconds_file.read_text()) if seconds_file.is_file() else {}
+    for name in args.cohorts:
+        now = run_route(args.work, name, n, n_frames, args.jobs)
+        if now.get("track", 0) > 1.0:  # this run computed the stages: keep their times
+            seconds[name] = now
+            seconds_file.write_text(json.dumps(seconds, indent=1))
+    table = _table(rows(args.work, n, n_frames, seconds, permutations, repetitions,
+                        np.random.default_rng(0)), n_frames, permutations, repetitions)  # fmt: skip
+    print("\n" + table)
+    if args.publish:
+        publish("cycle_routes", table, "python benchmarks/bench_cycle_routes.py --publish")
+
+
+if __name__ == "__main__":
+    main()
