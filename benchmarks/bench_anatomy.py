@@ -25,6 +25,10 @@ transport, with and without the volume normalisation:
   subsamples with any vertex found, with its binomial interval (overlapping
   subsamples of one cohort: a rate, not independent replications);
 * anatomy plus effect: power and Dice of both tests against the planted region.
+
+The motion without transport is also volume-normalised as a transported motion would
+be (its ``S' - S`` scaled on the atlas to the subject's volume change): the
+normalisation without any transport, to tell what the transport adds to it.
 """
 
 from __future__ import annotations
@@ -138,14 +142,15 @@ def _rows(work, n, permutations, repetitions, rng):
     rows = []
     for motion in _motions(work, "anatomy"):
         for normalize in (None, "volume"):
-            if normalize and motion.method == "none":
-                continue
             label = _label(motion) + (", volume-normalised" if normalize else "")
+            source, effect_motion = motion, effect[motion.name]
+            if normalize and motion.method == "none":  # S' - S itself scaled on the atlas
+                label = "no transport, volume-normalised (S' - S scaled on the atlas)"
             if label in done:
                 rows.append(done[label])
                 continue
             try:
-                m, scales = (motion, None) if normalize is None else normalize_motion(motion)
+                m, scales = (source, None) if normalize is None else normalize_motion(source)
             except CohortError as exc:  # a transported motion no scale brings to the ratio
                 print(f"{motion.name}, volume-normalised: {exc}", flush=True)
                 rows.append({"label": label, "failed": str(exc)})
@@ -156,7 +161,7 @@ def _rows(work, n, permutations, repetitions, rng):
             null = compare_groups(m, labels, ("dilated", "controls"), permutations, rng=rng)
             rate = _subsample_rate(m, labels, rng, repetitions, min(permutations, 1000))
             try:
-                e = compare_groups(effect[motion.name], labels, ("dilated", "controls"),
+                e = compare_groups(effect_motion, labels, ("dilated", "controls"),
                                    permutations, rng=rng, normalize=normalize)  # fmt: skip
                 found = {t: e.detected(0.05, t) for t in ("displacement", "normal")}
             except CohortError as exc:  # the effect cohort's normalisation

@@ -375,3 +375,16 @@ def test_the_volume_normalisation_reaches_large_scales_and_names_a_lost_motion(p
     lost = replace(small, displacement=small.displacement / 40.0)
     with pytest.raises(CohortError, match=f"subject {small.subjects[0]}'s transported motion"):
         normalize_motion(lost, small.volume_ratio)
+
+
+def test_the_motion_without_transport_is_normalised_on_the_atlas(planted):
+    """S' - S applied to the atlas is scaled to the subject's own volume change there."""
+    from dataclasses import replace
+
+    _, motion = planted
+    small = replace(motion, method="none").subset(motion.subjects[:3])
+    scaled, scales = normalize_motion(small)
+    v0 = enclosed_volume(small.atlas, small.faces)
+    for d, ratio in zip(scaled.displacement, small.volume_ratio):
+        assert abs(enclosed_volume(small.atlas + d, small.faces) / v0 - ratio) < 1e-6
+    assert np.any(np.abs(scales - 1.0) > 0.01)  # the atlas is not each subject's anatomy

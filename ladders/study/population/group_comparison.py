@@ -27,7 +27,9 @@ deformations of Guigui, Moceri, Sermesant and Pennec (ISBI 2021), in the point
 distribution model of the atlas (:func:`ladders.statistics.normalize_amplitude`).
 The scale is searched in ``[0, 16]`` (:data:`VOLUME_SCALE_BRACKET`): a transport
 that keeps less than a sixteenth of the subject's volume change has lost the motion,
-and its normalisation fails, naming the subject.
+and its normalisation fails, naming the subject. The motion without transport is
+normalised too: each ``S' - S``, applied to the atlas, is scaled to the subject's volume
+change there.
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ from ..area_strain import area_strain
 from ..errors import CohortError
 from ..volume import enclosed_volume
 from ..wall_motion import outward_vertex_normals
-from .transported_motion import NO_TRANSPORT, TransportedMotion
+from .transported_motion import TransportedMotion
 
 __all__ = [
     "NORMALIZATIONS",
@@ -181,7 +183,11 @@ def normalize_motion(
         ``V(T + lambda_i (T'_i - T)) / V(T) = V(S'_i) / V(S_i)``, and the scales.
         Its area strain and its wall motion are those of the rescaled surfaces
         ``T + lambda_i (T'_i - T)`` (the wall motion computed when first read).
-        The motion without transport is returned unchanged (scales 1).
+        The motion without transport is scaled the same way: its ``S'_i - S_i``,
+        which the analysis applies to the atlas, is brought to the subject's own
+        volume change on the atlas (the normalisation with no transport at all; for
+        groups whose anatomy differs it is as close to the ideal transport as the best
+        transports, ``docs/population.md``).
     """
     n = len(motion.subjects)
     if volume_ratios is None:
@@ -191,8 +197,6 @@ def normalize_motion(
     ratios = np.asarray(volume_ratios, dtype=float)
     if ratios.shape != (n,) or not np.all(np.isfinite(ratios) & (ratios > 0)):
         raise CohortError(f"volume_ratios: expected {n} positive numbers, got {ratios.shape}")
-    if motion.method == NO_TRANSPORT:
-        return motion, np.ones(n)
     space = Euclidean(motion.atlas.shape)
     scales = np.array(
         [
