@@ -14,7 +14,8 @@ its part along the true ES surface's normal and its tangential part, the mean mo
 about the long axis, degrees) and the time per subject and per frame.
 
 Usage: ``python benchmarks/bench_cine_tracking.py [--n-subjects 2] [--frames 25]
-[--grids both|short-axis|isotropic] [--publish]``;
+[--grids both|short-axis|isotropic] [--spacing 20] [--jobs 2] [--publish]``
+(``--spacing``: the control points' spacing, mm; ``--jobs``: registrations at a time);
 ``--publish`` writes ``docs/generated/tracking_cine.md`` (with the CPU).
 """
 
@@ -23,6 +24,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -106,19 +108,20 @@ def run(n_subjects: int, n_frames: int, settings=SETTINGS, grids=tuple(GRIDS)):
 def table(rows, n_subjects, n_frames, es_frame, settings=SETTINGS) -> str:
     lines = [
         f"{n_subjects} synthetic subject(s), {n_frames} frames (ES = frame {es_frame}), "
-        f"control points {settings.control_point_spacing:g} mm apart, {settings.metric}, "
+        f"{settings.metric}, "
         f"{settings.optimizer}, {settings.iterations} iterations per level, shrink "
         f"{settings.shrink_factors}, sampling {settings.sampling_percentage:g}, "
-        f"combine={settings.combine}, {settings.threads} thread(s). Errors at ES, mean over "
+        f"combine={settings.combine}, {settings.threads} thread(s), {settings.jobs} "
+        "registration(s) at a time. Errors at ES, mean over "
         "vertices and subjects, mm.",
         "",
-        "| grid | voxels | tagging | normal error | tangential error | motion (no tracking) "
+        "| control points (mm) | grid | voxels | tagging | normal error | tangential error | motion (no tracking) "
         "| twist error (deg) | s / subject | s / frame |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for grid_name, tagged, shape, m in rows:
+    for spacing, grid_name, tagged, shape, m in rows:
         lines.append(
-            f"| {grid_name} | {'x'.join(map(str, shape))} | {'yes' if tagged else 'no'} | "
+            f"| {spacing:g} | {grid_name} | {'x'.join(map(str, shape))} | {'yes' if tagged else 'no'} | "
             f"{m['normal']:.2f} | {m['tangential']:.2f} | {m['motion']:.2f} | {m['twist']:.2f} | "
             f"{m['seconds']:.1f} | {m['seconds'] / n_frames:.2f} |"
         )
@@ -134,16 +137,24 @@ def main(argv=None):
         help="the grids to run (default both)",
     )  # fmt: skip
     parser.add_argument("--publish", action="store_true")
+    parser.add_argument("--spacing", default=f"{SETTINGS.control_point_spacing:g}",
+                        help="control point spacings, mm, comma-separated")  # fmt: skip
+    parser.add_argument("--jobs", type=int, default=1)
     args = parser.parse_args(argv)
     grids = [g for g in GRIDS if args.grids == "both" or g.startswith(args.grids)]
-    rows, es_frame = run(args.n_subjects, args.frames, grids=grids)
-    text = table(rows, args.n_subjects, args.frames, es_frame)
+    rows, sets = [], []
+    for spacing in (float(x) for x in args.spacing.split(",")):
+        settings = replace(SETTINGS, control_point_spacing=spacing, jobs=args.jobs)
+        got, es_frame = run(args.n_subjects, args.frames, settings, grids=grids)
+        rows += [(spacing, *r) for r in got]
+        sets.append(settings)
+    text = table(rows, args.n_subjects, args.frames, es_frame, sets[0])
     print(machine())
     print(text)
     if args.publish:
         command = "python benchmarks/bench_cine_tracking.py"
         command += f" --n-subjects {args.n_subjects} --frames {args.frames}"
-        command += f" --grids {args.grids} --publish"
+        command += f" --grids {args.grids} --spacing {args.spacing} --jobs {args.jobs} --publish"
         print(publish("tracking_cine", text, command))
 
 

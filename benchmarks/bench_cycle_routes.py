@@ -3,6 +3,7 @@
     python benchmarks/bench_cycle_routes.py --work symladders-output/bench_cycle_routes
     python benchmarks/bench_cycle_routes.py --publish     # docs/generated/cycle_routes.md
     python benchmarks/bench_cycle_routes.py --quick       # 12 subjects, 10 frames
+    python benchmarks/bench_cycle_routes.py --landmarks with  # only the route with landmarks
 
 The route a user runs from 4-D label images, with the library's functions (the commands
 of ``docs/tutorial_cycle.md``): the whole-cycle cohort
@@ -10,7 +11,10 @@ of ``docs/tutorial_cycle.md``): the whole-cycle cohort
 20 controls, 25 frames) written as short-axis label series of 1.5 x 1.5 x 8 mm
 (:func:`~ladders.study.population.write_cycle_cohort`); the ED frame meshed
 (:func:`~ladders.study.imaging.mesh_label_images`) and put in the atlas's
-correspondence (:func:`~ladders.study.preparation.correspond_cohort`); the mesh
+correspondence (:func:`~ladders.study.preparation.correspond_cohort`), without
+landmarks (the surface fit alone fixes the turn about the long axis) and with the
+cohort's landmark table (``symladders cohort --cycle 25 --landmarks``: apex, base-plane
+centre and septal point of each ED, as a user gives them); the mesh
 tracked through every frame (:func:`~ladders.study.tracking.track_cohort`, projection
 with ``refine_ed``); the frames transported (:func:`~ladders.study.sequences.run_cycle_study`,
 pole ladder with residuals, ``alpha^2 = 100``) or not. Cohorts: the whole-cycle
@@ -73,14 +77,19 @@ def _cycles(name, n, n_frames):
     return make_two_group_cycles(n_subjects=n, abnormality=COHORTS[name], n_frames=n_frames)
 
 
-def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int) -> dict:
+#: route folder suffix -> correspondence with the cohort's landmark table
+ROUTES = {"": False, "_landmarks": True}
+
+
+def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int, landmarks: bool) -> dict:
     """Every stage of the label route (each resumes); the seconds of each."""
     c = _cycles(name, n, n_frames)
-    root = work / name
+    root = work / (name + ("_landmarks" if landmarks else ""))
+    table = root / "cohort" / "landmarks.csv" if landmarks else None
     seconds = {}
     start = time.perf_counter()
     if not (root / "cohort" / "cycle.json").is_file():
-        write_cycle_cohort(c, root / "cohort", "labels", 1.5, 8.0)
+        write_cycle_cohort(c, root / "cohort", "labels", 1.5, 8.0, landmarks=landmarks)
     seconds["render"] = time.perf_counter() - start
     images = sorted((root / "cohort" / "images").glob("*.nii.gz"))
     es = int(np.argmax(c.fractions))
@@ -88,7 +97,8 @@ def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int) -> dict:
         ("mesh", lambda: mesh_label_images(images, 1, root / "meshes", (0, es), jobs=jobs,
                                            progress=False)),
         ("correspond", lambda: correspond_cohort(root / "cohort" / "atlas.vtk", root / "meshes",
-                                                 root / "corresponded", jobs=jobs)),
+                                                 root / "corresponded", landmarks=table,
+                                                 jobs=jobs)),
         ("track", lambda: track_cohort(root / "corresponded", root / "cohort" / "images",
                                        root / "tracked", 1, TrackingSettings(refine_ed=True),
                                        jobs=jobs, progress=False)),
@@ -152,23 +162,30 @@ def _scores(motion, c, region, permutations, repetitions, rng):
 def rows(work: Path, n: int, n_frames: int, seconds: dict, permutations, repetitions, rng):
     out = []
     for name in COHORTS:
-        root = work / name
-        if not (root / "tracked").is_dir():
-            continue
         c = _cycles(name, n, n_frames)
-        atlas, faces = read_mesh(root / "cohort" / "atlas.vtk")
+        motions = []
+        for suffix, landmarks in ROUTES.items():
+            root = work / (name + suffix)
+            if not (root / "tracked").is_dir():
+                continue
+            atlas, faces = read_mesh(root / "cohort" / "atlas.vtk")
+            names, frames, matrices = _tracked(root, c)
+            error = _tracking_error(c, names, frames, matrices, faces)
+            per_subject = {k: v / max(len(names), 1)
+                           for k, v in seconds.get(name + suffix, {}).items()}  # fmt: skip
+            if not motions:
+                true = CycleMotion(c.names, c.frames - c.frames[:, :1], atlas, faces)
+                motions.append(("true frames (meshes in correspondence), no transport", true,
+                                None, {}))  # fmt: skip
+            route = "label series " + ("with landmarks" if landmarks else "without landmarks")
+            motions.append((f"{route}, tracked, no transport",
+                            CycleMotion(tuple(names), frames - frames[:, :1], atlas, faces),
+                            error, per_subject))  # fmt: skip
+            if (root / "cycle_study" / "cycle_study.json").is_file():
+                motions.append((f"{route}, tracked, pole ladder alpha^2 = {ALPHA2:g}",
+                                load_cycle_motion(root / "cycle_study"), error, per_subject))  # fmt: skip
         region = c.data.region.affected
-        names, frames, matrices = _tracked(root, c)
-        error = _tracking_error(c, names, frames, matrices, faces)
-        per_subject = {k: v / max(len(names), 1) for k, v in seconds.get(name, {}).items()}
-        true = CycleMotion(c.names, c.frames - c.frames[:, :1], atlas, faces)
-        motions = [("true frames (meshes in correspondence), no transport", true, None),
-                   ("label series, tracked, no transport",
-                    CycleMotion(tuple(names), frames - frames[:, :1], atlas, faces), error)]  # fmt: skip
-        if (root / "cycle_study" / "cycle_study.json").is_file():
-            motions.append((f"label series, tracked, pole ladder alpha^2 = {ALPHA2:g}",
-                            load_cycle_motion(root / "cycle_study"), error))  # fmt: skip
-        for label, motion, err in motions:
+        for label, motion, err, per_subject in motions:
             power, d, rate = _scores(motion, c, region, permutations, repetitions, rng)
             out.append((name, label, len(motion.subjects), err, per_subject, power, d, rate))
             print(out[-1], flush=True)
@@ -195,7 +212,9 @@ def _table(rows, n_frames, permutations, repetitions) -> str:
     note = (
         f"Synthetic subjects through {n_frames} frames (ES at 35 %), short-axis label series "
         "of 1.5 x 1.5 x 8 mm; tracking by projection with refine_ed; whole-cycle hypokinesia "
-        f"of segments 7, 8, 13, 14 at {cohorts}. {permutations:,} "
+        f"of segments 7, 8, 13, 14 at {cohorts}. Correspondence of the ED meshes without "
+        "landmarks (the surface fit alone turns each mesh about its long axis) or with the "
+        f"cohort's landmark table (apex, base-plane centre, septal point). {permutations:,} "
         f"permutations, FWER 5 %; null: {repetitions} random splits of the controls. Seconds "
         "per subject: a stage's wall-clock time over the subjects, 2 subjects at a time on "
         "the 2 cores (throughput), from the run that computed the stage."
@@ -209,6 +228,8 @@ def main(argv=None) -> None:
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--cohorts", nargs="+", choices=tuple(COHORTS), default=list(COHORTS))
+    parser.add_argument("--landmarks", choices=("with", "without", "both"), default="both",
+                        help="correspondence with the cohort's landmark table, without, or both")  # fmt: skip
     parser.add_argument("--publish", action="store_true")
     args = parser.parse_args(argv)
     print(machine(), flush=True)
@@ -216,11 +237,13 @@ def main(argv=None) -> None:
     permutations, repetitions = (500, 10) if args.quick else (5000, 100)
     seconds_file = args.work / "seconds.json"
     seconds = json.loads(seconds_file.read_text()) if seconds_file.is_file() else {}
+    routes = {"with": [True], "without": [False], "both": [False, True]}[args.landmarks]
     for name in args.cohorts:
-        now = run_route(args.work, name, n, n_frames, args.jobs)
-        if now.get("track", 0) > 1.0:  # this run computed the stages: keep their times
-            seconds[name] = now
-            seconds_file.write_text(json.dumps(seconds, indent=1))
+        for landmarks in routes:
+            now = run_route(args.work, name, n, n_frames, args.jobs, landmarks)
+            if now.get("track", 0) > 1.0:  # this run computed the stages: keep their times
+                seconds[name + ("_landmarks" if landmarks else "")] = now
+                seconds_file.write_text(json.dumps(seconds, indent=1))
     table = _table(rows(args.work, n, n_frames, seconds, permutations, repetitions,
                         np.random.default_rng(0)), n_frames, permutations, repetitions)  # fmt: skip
     print("\n" + table)

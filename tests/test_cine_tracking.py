@@ -177,6 +177,21 @@ def test_two_frames_track_and_the_tracking_is_deterministic():
     assert np.abs(a[1] - points - SHIFT).max() < 0.5
 
 
+def test_registrations_in_parallel_give_the_same_tracking():
+    """``jobs`` runs the independent registrations of a series at a time: the same result
+    (bit for bit, one thread each), and the same stored-result key."""
+    from dataclasses import replace
+
+    fixed, moving, affine = _blobs(SHIFT)
+    points = np.random.default_rng(7).uniform(-6.0, 6.0, size=(10, 3))
+    series = np.stack([fixed, moving, fixed])
+    serial = track_cine(series, affine, points, BLOB_SETTINGS)
+    parallel = replace(BLOB_SETTINGS, jobs=2)
+    np.testing.assert_array_equal(track_cine(series, affine, points, parallel), serial)
+    assert parallel.key() == BLOB_SETTINGS.key()
+    assert replace(BLOB_SETTINGS, iterations=BLOB_SETTINGS.iterations + 1).key() != parallel.key()
+
+
 def test_a_flipped_grid_tracks_in_its_world_frame():
     """The same images on a grid whose first axis is reversed: the same world motion."""
     fixed, moving, affine = _blobs(SHIFT)
@@ -223,6 +238,7 @@ def test_bad_input_names_the_argument(change, name):
         ("shrink_factors", (2, 0)),
         ("smoothing_sigmas", (1.0,)),
         ("sampling_percentage", 1.5),
+        ("jobs", 0),
     ],
 )
 def test_bad_settings_name_the_field(field, value):
@@ -247,7 +263,8 @@ def test_symladders_track_cine_moves_each_subject_as_track_cine_does(tmp_path, c
     write_series(images / "case.nii.gz", series, case["affine"])
     out = tmp_path / "tracked"
     argv = ["track", str(meshes), str(images), "--cine", "--control-point-spacing", "20",
-            "--iterations", "15", "-o", str(out), "--jobs", "1", "--no-progress"]  # fmt: skip
+            "--iterations", "15", "-o", str(out), "--jobs", "1", "--registration-jobs", "2",
+            "--no-progress"]  # fmt: skip
     assert main(argv) == 1
     assert "orphan" in capsys.readouterr().err
     stored = series.astype(np.float32).astype(float)

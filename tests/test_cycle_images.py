@@ -72,7 +72,54 @@ def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, cap
     assert len(list((out / "images").glob("*.nii.gz"))) == 6
     assert json.loads((out / "cycle.json").read_text())["voxel_mm"] == [2.0, 2.0, 6.0]
     for extra, message in ((["--pose"], "--pose: not with --cycle"),
+                           (["--design"], "--design: not with --cycle"),
                            (["--tagging"], "--tagging: only with --images cine"),
                            (["--voxel", "2"], "expected IN_PLANE,THICKNESS")):  # fmt: skip
         assert main(argv + extra) == 2
         assert message in capsys.readouterr().err
+
+
+def test_cli_writes_the_ed_landmarks_that_correspond_reads(tmp_path, capsys):
+    """``--landmarks`` with ``--cycle``: one row per subject (and the atlas's), the apex and
+    septal point on the subject's true ED surface and near its ED label image's, the apex
+    the ED point farthest from the base along the long axis, the base-plane centre on the
+    base's height; ``correspond --landmarks`` reads the table and, the turn about the long
+    axis fixed, gives back every subject's ED vertices in its own frame."""
+    from ladders.study.preparation.landmarks import read_landmarks
+
+    out, thickness = tmp_path / "cohort", 6.0
+    argv = ["cohort", "--cycle", "3", "--subjects", "2", "--vertices", "241", "--voxel",
+            f"2,{thickness:g}", "--landmarks", "-o", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    assert f"landmarks: {out / 'landmarks.csv'}" in capsys.readouterr().out
+    table = read_landmarks(out / "landmarks.csv")
+    names = sorted(p.name.removesuffix("_ed.vtk") for p in out.glob("*_ed.vtk"))
+    assert len(names) == 2 and list(table) == ["atlas", *names]
+    assert json.loads((out / "cycle.json").read_text())["landmarks"] == "landmarks.csv"
+    for name in names:
+        lm = table[name]
+        ed, faces = read_mesh(out / f"{name}_ed.vtk")
+        frame0, _ = read_mesh(out / "frames" / name / "frame_00.vtk")
+        assert np.allclose(ed, frame0, atol=1e-6)  # the ED mesh is the ED image's surface
+        on = distances_to_surface(np.stack([lm.apex, lm.septum]), ed, faces)
+        assert on.max() < 1e-3  # mm: on the true ED surface
+        height = (ed - lm.apex) @ lm.long_axis
+        assert height.min() > -1e-6  # no ED point lies beyond the apex, seen from the base
+        assert abs(height.max() - np.linalg.norm(lm.base - lm.apex)) < 0.5  # the base's height
+        series = read_label_series(out / "images" / f"{name}.nii.gz")
+        vertices, image_faces, _ = extract_surface(series[0], 1)
+        near = distances_to_surface(np.stack([lm.apex, lm.septum]), vertices, image_faces)
+        assert near.max() < thickness / 2  # in the ED label image's world frame
+    cor = tmp_path / "corresponded"
+    argv = ["correspond", "--atlas", str(out / "atlas.vtk"), "--meshes", str(out), "-o",
+            str(cor), "--landmarks", str(out / "landmarks.csv"), "--jobs", "1", "--no-progress"]  # fmt: skip
+    assert main(argv) == 0
+    assert f"landmarks {out / 'landmarks.csv'}" in capsys.readouterr().out
+    for name in names:
+        record = json.loads((cor / "correspondence" / f"{name}.json").read_text())
+        assert np.allclose(record["landmarks"]["subject"], table[name].as_array())
+        back = np.linalg.inv(np.asarray(record["transform"]["matrix"]))
+        v, _ = read_mesh(cor / f"{name}_ed.vtk")
+        truth, _ = read_mesh(out / f"{name}_ed.vtk")
+        error = np.linalg.norm(v @ back[:3, :3].T + back[:3, 3] - truth, axis=1)
+        assert error.mean() < 1.0  # mm: vertex i is the same material point again

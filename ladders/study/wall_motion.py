@@ -29,6 +29,7 @@ import trimesh
 
 from manifolds.data_terms.mesh_geometry import check_mesh
 
+from .surface_queries import closest_points, intersect_lines_triangles, line_hits
 from .volume import enclosed_volume
 
 __all__ = ["NormalProjection", "normal_wall_motion", "outward_vertex_normals"]
@@ -120,18 +121,7 @@ def _line_hits(origins, directions, tv, tf, max_distance, chunk=200_000):
     for s in range(0, len(lines), chunk):
         i, j = lines[s : s + chunk], tris[s : s + chunk]
         o, d = origins[i], directions[i]
-        e1, e2 = b[j] - a[j], c[j] - a[j]
-        p = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, p)
-        ok = np.abs(det) > 1e-12 * np.einsum("ij,ij->i", e1, e1)
-        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-        s_vec = o - a[j]
-        u = np.einsum("ij,ij->i", s_vec, p) * inv
-        q = np.cross(s_vec, e1)
-        w = np.einsum("ij,ij->i", d, q) * inv
-        t = np.einsum("ij,ij->i", e2, q) * inv
-        eps = 1e-9
-        inside = ok & (u >= -eps) & (w >= -eps) & (u + w <= 1 + eps)
+        t, inside = intersect_lines_triangles(o, d, a[j], b[j], c[j])
         out.append((i[inside], t[inside], o[inside] + t[inside, None] * d[inside], j[inside]))
     if not out:
         return np.zeros(0, int), np.zeros(0), np.zeros((0, 3)), np.zeros(0, int)
@@ -164,12 +154,23 @@ def normal_wall_motion(
     elif not (np.isfinite(max_distance) and max_distance > 0):
         raise ValueError(f"normal_wall_motion: max_distance: expected > 0, got {max_distance}")
     normals = outward_vertex_normals(v, f)
-    target = trimesh.Trimesh(tv, tf, process=False)
     target_normals = _outward_face_normals(tv, tf)
-    vertex, t, loc, tri = _line_hits(v, normals, tv, tf, max_distance)
-    facing = np.einsum("ij,ij->i", target_normals[tri], normals[vertex]) > 0
-    keep = facing & (np.abs(t) <= max_distance)
-    vertex, loc, dist = vertex[keep], loc[keep], np.abs(t[keep])
+
+    def facing_hits(found, lines):
+        vertex, t, loc, tri = found
+        vertex = lines[vertex]
+        keep = (np.einsum("ij,ij->i", target_normals[tri], normals[vertex]) > 0) & (
+            np.abs(t) <= max_distance
+        )
+        return vertex[keep], loc[keep], np.abs(t[keep])
+
+    every = np.arange(len(v))
+    vertex, loc, dist = facing_hits(line_hits(v, normals, tv, tf, max_distance), every)
+    missed = np.setdiff1d(every, vertex)
+    if len(missed):  # e.g. a line through an edge or a vertex: the tolerant test of this module
+        found = _line_hits(v[missed], normals[missed], tv, tf, max_distance)
+        more = facing_hits(found, missed)
+        vertex, loc, dist = (np.concatenate(pair) for pair in zip((vertex, loc, dist), more))
     order = np.lexsort((dist, vertex))  # by vertex, the nearest hit first (stable on ties)
     nearest = order[np.unique(vertex[order], return_index=True)[1]]
     hit = np.zeros(len(v), dtype=bool)
@@ -177,7 +178,6 @@ def normal_wall_motion(
     hit[vertex[nearest]] = True
     points[vertex[nearest]] = loc[nearest]
     if not hit.all():
-        closest, _, _ = trimesh.proximity.closest_point(target, v[~hit])
-        points[~hit] = closest
+        points[~hit] = closest_points(v[~hit], tv, tf)[0]
     distance = np.einsum("ij,ij->i", points - v, normals)
     return NormalProjection(points, distance, hit, normals)

@@ -153,8 +153,9 @@ def add_cohort_parser(sub) -> None:
                    help="move each subject by a random rigid motion (up to 30 degrees, 20 mm)")  # fmt: skip
     p.add_argument("--landmarks", action="store_true",
                    help="also write landmarks.csv: apex, base-plane centre and septal point of "
-                        "the atlas and of every subject (posed with it), for 'symladders "
-                        "correspond' and 'symladders atlas'")  # fmt: skip
+                        "the atlas and of every subject's ED (posed with it; with --cycle, in "
+                        "the coordinates of the ED mesh and of the images), for 'symladders "
+                        "correspond --landmarks' and 'symladders atlas'")  # fmt: skip
     g = p.add_argument_group(
         "several groups, anatomy and covariates",
         "any of these writes design.csv too; the subjects are split evenly between the groups",

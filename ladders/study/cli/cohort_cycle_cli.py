@@ -3,7 +3,10 @@
 A thin wrapper of :func:`~ladders.study.population.make_two_group_cycles` and
 :func:`~ladders.study.population.write_cycle_cohort`: besides the ED/ES meshes,
 ``groups.csv`` and ``planted_region.json`` of ``symladders cohort``, every subject's
-4-D label (or cine) series in ``images/`` and its true frames in ``frames/``.
+4-D label (or cine) series in ``images/`` and its true frames in ``frames/``. With
+``--landmarks``, ``landmarks.csv`` too: every subject's apex, base-plane centre and septal
+point at ED (the cohort is not posed: the coordinates of its meshes and of its images'
+world frame), for ``symladders correspond --landmarks``.
 """
 
 from __future__ import annotations
@@ -49,7 +52,8 @@ def add_cycle_arguments(p) -> None:
         "the whole cycle",
         "with --cycle, also every subject's 4-D series in images/ (frame 0 at ED) and its "
         "true frames in frames/<subject>/frame_<kk>.vtk; the planted abnormality acts "
-        "through the whole cycle",
+        "through the whole cycle; --landmarks writes every subject's ED landmarks (no pose: "
+        "the meshes' and the images' world coordinates)",
     )
     g.add_argument("--cycle", type=_frames, default=None, metavar="FRAMES",
                    help="frames per cycle (e.g. 25; ES at 35 %% of the cycle)")  # fmt: skip
@@ -72,8 +76,8 @@ def run_cycle_cohort(args, abnormality) -> int:
     from ..population import make_two_group_cycles, write_cycle_cohort
 
     given = [o for o in _EXCLUSIVE if getattr(args, o, None) not in (None, False, 0.0)]
-    if given or args.design or args.landmarks:
-        flag = "--" + (given[0] if given else "design" if args.design else "landmarks")
+    if given or args.design:
+        flag = "--" + (given[0] if given else "design")
         raise UsageError(f"symladders cohort: error: {flag.replace('_', '-')}: not with --cycle")
     if args.tagging and args.images != "cine":
         raise UsageError("symladders cohort: error: --tagging: only with --images cine")
@@ -83,7 +87,8 @@ def run_cycle_cohort(args, abnormality) -> int:
         cycles = make_two_group_cycles(args.subjects, abnormality, args.cycle, 0.35,
                                        args.vertices, args.seed, args.patients)  # fmt: skip
         folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
-                                    tagging=TagGrid() if args.tagging else None)  # fmt: skip
+                                    tagging=TagGrid() if args.tagging else None,
+                                    landmarks=args.landmarks)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
     n_patients = int(cycles.patients.sum())
@@ -95,6 +100,8 @@ def run_cycle_cohort(args, abnormality) -> int:
         print(f"planted: {abnormality.describe()}; {int(region.affected.sum())} of "
               f"{region.weight.size} atlas vertices affected")  # fmt: skip
     what = "no images" if args.images == "none" else f"{args.images}: {folder / 'images'}"
+    if args.landmarks:
+        what += f"; landmarks: {folder / 'landmarks.csv'}"
     print(f"{what}; true frames: {folder / 'frames'}; groups: {folder / 'groups.csv'}; "
           f"truth: {folder / 'planted_region.json'}, {folder / 'cycle.json'}")  # fmt: skip
     return 0

@@ -8,6 +8,7 @@ standard error), 2 on a usage error.
 from __future__ import annotations
 
 import csv
+import os
 import sys
 from pathlib import Path
 
@@ -89,6 +90,10 @@ def add_track_parser(sub) -> None:
                    help="with --cine: spacing of the B-spline control points (mm)")  # fmt: skip
     p.add_argument("--iterations", type=nonnegative_int, default=30,
                    help="with --cine: optimiser iterations per resolution level")  # fmt: skip
+    p.add_argument("--registration-jobs", type=jobs_count, default=1, metavar="N",
+                   help="with --cine: registrations of a subject run N at a time (processes; the "
+                        "same result whatever N); with --jobs subjects at a time, use at most "
+                        "cores / jobs")  # fmt: skip
     p.add_argument("--output", "-o", type=output_folder, default="symladders-output/tracked",
                    help="folder of the tracked meshes")  # fmt: skip
     p.add_argument("--method", choices=("projection", "registration"), default="projection",
@@ -124,6 +129,9 @@ def run_track_command(args) -> int:
             settings = CineTrackingSettings(
                 control_point_spacing=args.control_point_spacing,
                 iterations=max(1, args.iterations),
+                jobs=(os.cpu_count() or 1)
+                if args.registration_jobs == -1
+                else args.registration_jobs,
             )
         else:
             settings = TrackingSettings(

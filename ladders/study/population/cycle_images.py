@@ -14,9 +14,16 @@
                                   the true surfaces of every frame, in the atlas's
                                   correspondence (what ``symladders track`` estimates)
     <folder>/cycle.json           frames, ES frame, the grid and what was rendered
+    <folder>/landmarks.csv        with ``landmarks=True``: the apex, base-plane centre and
+                                  septal point of the atlas (row ``atlas``) and of every
+                                  subject's ED frame, the table ``symladders correspond
+                                  --landmarks`` reads
 
 The images are short-axis stacks (slices along the long axis) over each subject's
-own field of view: its ED surface with a margin of 15 mm (8 mm above the base).
+own field of view: its ED surface with a margin of 15 mm (8 mm above the base). The
+cohort is not posed: the meshes, the frames and the images' world coordinates (their
+affines) are all the generator's frame, in mm, so one landmark table serves the ED
+meshes and the meshes made from the ED images.
 """
 
 from __future__ import annotations
@@ -30,6 +37,8 @@ from ..errors import CohortError
 from ..imaging.cine import TagGrid, write_series
 from ..imaging.voxelize import short_axis_affine
 from ..meshes.mesh_io import write_mesh
+from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
+from ..preparation.synthetic_landmarks import synthetic_landmarks
 from .two_groups import write_two_group_cohort
 
 __all__ = ["IMAGE_KINDS", "cycle_grid", "write_cycle_cohort"]
@@ -62,6 +71,7 @@ def write_cycle_cohort(
     noise: float = 0.05,
     rng: np.random.Generator | None = None,
     frames: bool = True,
+    landmarks: bool = False,
 ) -> Path:
     """Write a whole-cycle cohort's images, frames and truth into ``folder`` (see the module).
 
@@ -81,6 +91,13 @@ def write_cycle_cohort(
         Cine only: the noise (default: seeded by the cohort's seed).
     frames : bool, default True
         Also write every frame's true surface.
+    landmarks : bool, default False
+        Also write ``landmarks.csv``: the apex, base-plane centre and septal point
+        (:func:`~ladders.study.preparation.synthetic_landmarks.synthetic_landmarks`) of the
+        atlas (row ``atlas``) and of every subject's ED frame (``frames[i, 0]``, the
+        surface its ED image is rendered from; ``<subject>_ed`` itself for a cohort without
+        segmentation noise), in the coordinates of the meshes and of the images' world
+        frame, which ``symladders correspond --landmarks`` reads.
 
     Returns
     -------
@@ -94,6 +111,11 @@ def write_cycle_cohort(
     if data is None or not hasattr(cycles, "render_labels"):
         raise CohortError(f"cycles: expected a CohortCycles, got {type(cycles).__name__}")
     folder = write_two_group_cohort(data, folder)
+    if landmarks:
+        table = {"atlas": synthetic_landmarks(data.cohort.atlas)}
+        table.update((name, synthetic_landmarks(cycles.frames[i, 0]))
+                     for i, name in enumerate(cycles.names))  # fmt: skip
+        write_landmarks(folder / LANDMARKS_FILE, table)
     if images != "none":
         cycles.check_invertible()  # a folded motion cannot be rendered: say which subject
     if rng is None:
@@ -124,6 +146,7 @@ def write_cycle_cohort(
         "noise": noise if images == "cine" else None,
         "labels": {"background": 0, "blood_pool": 1, "myocardium": 2},
         "grids": grids,
+        "landmarks": LANDMARKS_FILE if landmarks else None,
     }
     (folder / "cycle.json").write_text(json.dumps(record, indent=1), encoding="utf-8")
     return folder

@@ -27,6 +27,8 @@ import trimesh
 from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_int
 
+from ..surface_queries import closest_points
+
 __all__ = ["affine_icp", "apply_affine"]
 
 
@@ -47,11 +49,11 @@ def _fit(source_h, target_pts):
     return out
 
 
-def _step(matrix, sv_h, sf, target_mesh, tv):
+def _step(matrix, sv_h, sf, tv, tf):
     """One step: closest points both ways, the way back by barycentric coordinates."""
     moved = apply_affine(matrix, sv_h[:, :3])
-    to_target = trimesh.proximity.closest_point(target_mesh, moved)[0]
-    points, _, tri = trimesh.proximity.closest_point(trimesh.Trimesh(moved, sf, process=False), tv)
+    to_target = closest_points(moved, tv, tf)[0]
+    points, _, tri = closest_points(tv, moved, sf)
     with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: left out
         bary = trimesh.triangles.points_to_barycentric(moved[sf[tri]], points)
     back = np.einsum("nk,nkd->nd", bary, sv_h[sf[tri]])
@@ -83,11 +85,10 @@ def affine_icp(
     tv, tf = check_mesh(target_vertices, target_faces, "affine_icp: target")
     iterations = check_int(iterations, "affine_icp: iterations", minimum=1)
     sv_h = np.c_[sv, np.ones(len(sv))]
-    target_mesh = trimesh.Trimesh(tv, tf, process=False)
     extent = float(np.ptp(sv, axis=0).max()) or 1.0
     matrix = np.eye(4)
     for _ in range(iterations):
-        new = _step(matrix, sv_h, sf, target_mesh, tv)
+        new = _step(matrix, sv_h, sf, tv, tf)
         change = np.abs(new - matrix)
         matrix = new
         if max(change[:3, :3].max(), change[:3, 3].max() / extent) < tol:

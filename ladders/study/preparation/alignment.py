@@ -29,6 +29,8 @@ from scipy import spatial
 from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_array, check_rng
 
+from ..surface_queries import closest_points
+
 __all__ = [
     "SimilarityTransform",
     "procrustes",
@@ -256,7 +258,7 @@ def icp_align(
         max_iterations=max_iterations, reflection=False, scale=scale,
     )  # fmt: skip
     transform = SimilarityTransform.from_matrix(matrix)
-    distance = trimesh.proximity.closest_point(target_mesh, transform.apply(sv))[1]
+    distance = closest_points(transform.apply(sv), tv, tf)[1]
     return transform, float(distance.mean())
 
 

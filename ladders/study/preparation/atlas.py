@@ -243,9 +243,8 @@ def _start_landmarks(landmarks, start_landmarks, initial, n) -> Landmarks | None
 
 def _atlas_landmarks(landmarks, transforms, vertices, faces) -> Landmarks:
     """The mean of the aligned landmarks, apex and septal point on the atlas's surface."""
-    import trimesh
+    from ..surface_queries import closest_points
 
     mean = np.mean([lm.transformed(t).as_array() for lm, t in zip(landmarks, transforms)], 0)
-    surface = trimesh.Trimesh(vertices, faces, process=False)
-    on_surface = trimesh.proximity.closest_point(surface, mean[[0, 2]])[0]
+    on_surface = closest_points(mean[[0, 2]], vertices, faces)[0]
     return Landmarks(on_surface[0], mean[1], on_surface[1])

@@ -235,10 +235,9 @@ def check_landmarks(landmarks: Landmarks, vertices, faces, tolerance: float, nam
     LandmarkError
         Naming the subject ``name``, the landmark and its distance.
     """
-    import trimesh
+    from ..surface_queries import closest_points
 
-    mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces), process=False)
-    _, dist, _ = trimesh.proximity.closest_point(mesh, np.stack([landmarks.apex, landmarks.septum]))
+    dist = closest_points(np.stack([landmarks.apex, landmarks.septum]), vertices, faces)[1]
     for label, d in zip(("apex", "septum"), dist):
         if d > tolerance:
             raise LandmarkError(

@@ -41,6 +41,7 @@ from scipy import spatial
 from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_float
 
+from ..surface_queries import closest_points
 from .affine import affine_icp
 from .alignment import SimilarityTransform, icp_align, icp_starts, principal_frame
 from .landmarks import Landmarks, axial_angle, landmark_transform
@@ -229,7 +230,6 @@ def fit_rigid(
     target = _Surface(tv, tf)
     sample = _subsample(sv)
     centre, axes = principal_frame(tv, tf)
-    surface = trimesh.Trimesh(tv, tf, process=False)
 
     if source_landmarks is not None:
         start = landmark_transform(source_landmarks, target_landmarks, scale=scale)
@@ -253,5 +253,5 @@ def fit_rigid(
         turn, spread = _axial_scan(fitted, sample, target, axes[:, 0], centre, tolerance)
         final = axis_rotation(axes[:, 0], turn, centre).compose(fitted)
         disagreement, method = None, "icp"
-    distance = float(trimesh.proximity.closest_point(surface, final.apply(sv))[1].mean())
+    distance = float(closest_points(final.apply(sv), tv, tf)[1].mean())
     return AlignmentFit(final, distance, method, spread, float(turn), disagreement)

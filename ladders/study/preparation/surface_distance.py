@@ -1,7 +1,7 @@
 """Distances between two triangulated surfaces: Hausdorff and mean surface distance.
 
 For meshes ``A`` and ``B`` the distance of every vertex of one to the other's
-surface (closest point on a triangle, :func:`trimesh.proximity.closest_point`)
+surface (closest point on a triangle, :func:`~ladders.study.surface_queries.closest_points`)
 gives the two one-sided sets of distances. Their maximum over both sides is
 the (vertex-sampled) Hausdorff distance; the mean of the two one-sided means is
 the symmetric mean surface distance. Both are in the meshes' unit and do not
@@ -11,17 +11,17 @@ depend on either triangulation's vertex order.
 from __future__ import annotations
 
 import numpy as np
-import trimesh
 
 from manifolds.data_terms.mesh_geometry import check_mesh
+
+from ..surface_queries import closest_points
 
 __all__ = ["surface_distances", "distances_to_surface"]
 
 
 def distances_to_surface(points, vertices, faces) -> np.ndarray:
     """Distance of each point ``(n, 3)`` to the surface ``(vertices, faces)``, shape ``(n,)``."""
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
-    return np.asarray(trimesh.proximity.closest_point(mesh, np.asarray(points, float))[1])
+    return closest_points(points, vertices, faces)[1]
 
 
 def surface_distances(vertices_a, faces_a, vertices_b, faces_b) -> dict:

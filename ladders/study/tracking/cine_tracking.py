@@ -95,6 +95,11 @@ class CineTrackingSettings:
         Average the forward and backward chains (UK Biobank) or keep the forward one.
     threads : int, default 1
         Threads of each registration (1: bit-for-bit reproducible).
+    jobs : int, default 1
+        Registrations run at a time (joblib processes). The registrations of a series
+        are independent of each other (only moving the points along the chains is
+        sequential), so they run in parallel with the same results whatever ``jobs``:
+        a setting of the computation, not of the result (left out of :meth:`key`).
     """
 
     control_point_spacing: float = 10.0
@@ -108,6 +113,7 @@ class CineTrackingSettings:
     seed: int = 0
     combine: str = "both"
     threads: int = 1
+    jobs: int = 1
 
     def as_dict(self) -> dict:
         """JSON-ready fields, with ``route: "cine"``."""
@@ -116,7 +122,8 @@ class CineTrackingSettings:
 
     def key(self) -> str:
         """Stable hash of every setting (what a stored result depends on)."""
-        text = json.dumps(self.as_dict(), sort_keys=True, default=repr)
+        fields = {k: v for k, v in self.as_dict().items() if k != "jobs"}
+        text = json.dumps(fields, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def __post_init__(self):
@@ -133,7 +140,7 @@ class CineTrackingSettings:
             raise ValueError(f"optimizer: expected one of {_OPTIMIZERS}, got {self.optimizer!r}")
         if self.combine not in _COMBINE:
             raise ValueError(f"combine: expected one of {_COMBINE}, got {self.combine!r}")
-        for name in ("histogram_bins", "iterations", "threads"):
+        for name in ("histogram_bins", "iterations", "threads", "jobs"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
                 raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
@@ -389,6 +396,22 @@ def _forward_weights(n: int, es_frame: int | None) -> np.ndarray:
     return np.where(t <= es_frame, 1.0 - 0.5 * t / es_frame, 0.5 * (n - t) / (n - es_frame))
 
 
+def _register_pair(fixed, moving, affine, settings):
+    return _register(image_from_array(fixed, affine), image_from_array(moving, affine), settings)
+
+
+def _registrations(series, affine, pairs, settings: CineTrackingSettings) -> list:
+    """The transforms of the frame pairs ``(fixed, moving)``, ``settings.jobs`` at a time."""
+    if settings.jobs == 1 or len(pairs) < 2:
+        images = [image_from_array(frame, affine) for frame in series]
+        return [_register(images[i], images[j], settings) for i, j in pairs]
+    from joblib import Parallel, delayed
+
+    return Parallel(n_jobs=min(settings.jobs, len(pairs)))(
+        delayed(_register_pair)(series[i], series[j], affine, settings) for i, j in pairs
+    )
+
+
 def _move(transform, points: np.ndarray) -> np.ndarray:
     return np.array([transform.TransformPoint(tuple(map(float, p))) for p in points])
 
@@ -434,20 +457,25 @@ def track_cine(
     n = s.shape[0]
     v = _check_vertices(ed_vertices, a, s.shape[1:])
     es = _check_es_frame(es_frame, n)
-    images = [image_from_array(frame, a) for frame in s]
+    # fixed frame t - 1, moving frame t: points move t - 1 -> t (forward, t = 1 .. n - 1);
+    # fixed frame t + 1 (mod n), moving frame t: t + 1 -> t (backward, t = n - 1 .. 1)
+    pairs = [(t - 1, t) for t in range(1, n)]
+    if settings.combine == "both":
+        pairs += [((t + 1) % n, t) for t in range(n - 1, 0, -1)]
+    transforms = dict(zip(pairs, _registrations(s, a, pairs, settings)))
 
     forward = np.empty((n, len(v), 3))
     forward[0] = v
-    for t in range(1, n):  # fixed frame t - 1, moving frame t: points move t - 1 -> t
-        forward[t] = _move(_register(images[t - 1], images[t], settings), forward[t - 1])
+    for t in range(1, n):
+        forward[t] = _move(transforms[(t - 1, t)], forward[t - 1])
     if settings.combine == "forward":
         return forward
 
     backward = np.empty_like(forward)
     backward[0] = v
     current = v
-    for t in range(n - 1, 0, -1):  # fixed frame t + 1 (mod n), moving frame t: t + 1 -> t
-        current = _move(_register(images[(t + 1) % n], images[t], settings), current)
+    for t in range(n - 1, 0, -1):
+        current = _move(transforms[((t + 1) % n, t)], current)
         backward[t] = current
     w = _forward_weights(n, es)[:, None, None]
     return w * forward + (1.0 - w) * backward

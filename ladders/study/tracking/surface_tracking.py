@@ -40,7 +40,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import trimesh
 
 from manifolds.data_terms.mesh_geometry import check_mesh
 
@@ -48,6 +47,7 @@ from ..preparation.affine import affine_icp, apply_affine
 from ..preparation.alignment import SimilarityTransform
 from ..preparation.correspondence import correspond_mesh
 from ..preparation.surface_distance import distances_to_surface
+from ..surface_queries import closest_points
 from ..wall_motion import normal_wall_motion
 from .settings import TrackingSettings
 
@@ -120,9 +120,8 @@ def crop_surface(vertices, faces, near_vertices, near_faces, distance: float | N
     """
     if distance is None:
         return vertices, faces, 1.0
-    mesh = trimesh.Trimesh(near_vertices, near_faces, process=False)
     centroids = vertices[faces].mean(axis=1)
-    near = trimesh.proximity.closest_point(mesh, centroids)[1] <= distance
+    near = closest_points(centroids, near_vertices, near_faces)[1] <= distance
     kept = faces[near]
     used = np.unique(kept)
     index = np.full(len(vertices), -1, dtype=np.int64)
