@@ -24,13 +24,13 @@ from generated_tables import machine, publish  # noqa: E402
 
 #: The tutorial, in order: (what it does, the command).
 COMMANDS = (
-    ("a synthetic cohort through the cycle: 4-D label series, groups, truth",
-     "symladders cohort --cycle 25 --subjects 12 -o cohort"),
+    ("a synthetic cohort through the cycle: 4-D label series, groups, ED landmarks, truth",
+     "symladders cohort --cycle 25 --subjects 12 --landmarks -o cohort"),
     ("mesh the ED and ES frames (ES is frame 9 of 25, cohort/cycle.json)",
      "symladders mesh cohort/images/*.nii.gz --label 1 --frames 0,9 -o meshes --no-progress"),
     ("put every ED mesh in the atlas's vertex correspondence",
-     "symladders correspond --atlas cohort/atlas.vtk --meshes meshes -o corresponded "
-     "--no-progress"),
+     "symladders correspond --atlas cohort/atlas.vtk --meshes meshes "
+     "--landmarks cohort/landmarks.csv -o corresponded --no-progress"),
     ("follow each ED mesh through its 25 frames",
      "symladders track corresponded cohort/images --label 1 --refine-ed -o tracked "
      "--no-progress"),
@@ -38,7 +38,8 @@ COMMANDS = (
      "symladders cycle-study tracked --atlas cohort/atlas.vtk --alpha2 100 -o cycle_study "
      "--no-progress"),
     ("test the groups per frame, on the peak and on the time to peak",
-     "symladders cycle-analyze cycle_study --groups cohort/groups.csv"),
+     "symladders cycle-analyze cycle_study --groups cohort/groups.csv "
+     "--compare patients controls --tfce"),
 )  # fmt: skip
 
 

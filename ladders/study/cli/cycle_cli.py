@@ -75,6 +75,9 @@ def add_cycle_parsers(sub) -> None:
                    help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
     q.add_argument("--permutations", type=positive_int, default=5000)
     q.add_argument("--seed", type=int, default=0, help="seed of the permutations")
+    q.add_argument("--tfce", action="store_true",
+                   help="also test the peak with threshold-free cluster enhancement on the "
+                        "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
     q.add_argument("--output", "-o", type=output_folder, default=None,
                    help="folder of the results (default: STUDY/analysis)")  # fmt: skip
     q.set_defaults(run=run_cycle_analyze_command, output_is_file=False)
@@ -136,7 +139,8 @@ def run_cycle_analyze_command(args) -> int:
         motion = type(motion)(tuple(motion.subjects[i] for i in keep),
                               motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
     try:
-        tests = compare_cycles(motion, labels, args.permutations, np.random.default_rng(args.seed))
+        tests = compare_cycles(motion, labels, args.permutations,
+                               np.random.default_rng(args.seed), tfce=args.tfce)  # fmt: skip
     except ValueError as exc:  # e.g. a group of fewer than 3 subjects
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
     output = Path(args.output) if args.output else Path(args.study) / "analysis"
@@ -146,6 +150,9 @@ def run_cycle_analyze_command(args) -> int:
     print(
         f"symladders cycle-analyze: {names[0]} ({int(tests.labels.sum())}) against {names[1]} "
         f"({int((~tests.labels).sum())}), {args.permutations:,} permutations: vertices found at "
-        f"FWER 5 %: peak {found[0]}, time to peak {found[1]}, some frame {frames}; in {output}"
-    )
+        f"FWER 5 %: peak {found[0]}"
+        + ("" if tests.peak_tfce is None
+           else f" (TFCE: {int((tests.peak_tfce.p_fwer_enhanced < 0.05).sum())})")
+        + f", time to peak {found[1]}, some frame {frames}; in {output}"
+    )  # fmt: skip
     return 0

@@ -3,8 +3,9 @@
 Written by :func:`write_cycle_tests` into one folder:
 
 * ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm) and
-  time to peak (fraction of the cycle), their ``t`` and FWER-corrected p, and the
-  smallest per-frame p;
+  time to peak (fraction of the cycle), their ``t`` and FWER-corrected p, the
+  smallest per-frame p, and with the peak's TFCE test its enhanced map and FWER p
+  (``peak_tfce``, ``peak_tfce_p_fwer``);
 * ``cycle_frames.csv``: per frame, its fraction of the cycle, the vertices found at
   FWER 5 % (vertices and frames together) and the largest ``|t|``;
 * ``cycle_tests.vtu``: the atlas with those per-vertex columns as point data;
@@ -39,6 +40,14 @@ def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
         "time_t": tests.time_to_peak.statistic,
         "time_p_fwer": tests.time_to_peak.p_fwer,
         "frames_min_p_fwer": tests.per_frame.p_fwer.min(axis=0),
+        **(
+            {}
+            if tests.peak_tfce is None
+            else {
+                "peak_tfce": tests.peak_tfce.enhanced,
+                "peak_tfce_p_fwer": tests.peak_tfce.p_fwer_enhanced,
+            }
+        ),
     }
 
 
