@@ -50,6 +50,7 @@ import numpy as np
 from manifolds.data_terms.mesh_geometry import check_mesh
 
 from ..preparation.landmarks import LandmarkError, Landmarks
+from ..surface_queries import intersect_lines_triangles
 from ..volume import boundary_vertices, enclosed_volume
 from .label_images import ImageError, LabelImage
 
@@ -237,18 +238,12 @@ def label_centroid(image: LabelImage, label: int, role: str = "label") -> np.nda
 
 def _first_crossing(origin, direction, v, f) -> np.ndarray | None:
     """The first point where the ray ``origin + t direction`` (t > 0) crosses a face."""
-    v0, v1, v2 = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-    e1, e2 = v1 - v0, v2 - v0
-    p = np.cross(direction, e2)
-    det = np.einsum("ij,ij->i", e1, p)
-    ok = np.abs(det) > 1e-12 * np.einsum("ij,ij->i", e1, e1)
-    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
-    s = origin - v0
-    u = np.einsum("ij,ij->i", s, p) * inv
-    q = np.cross(s, e1)
-    w = (q @ direction) * inv
-    t = np.einsum("ij,ij->i", e2, q) * inv
-    hit = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 0)
+    n = len(f)
+    t, inside = intersect_lines_triangles(
+        np.broadcast_to(origin, (n, 3)), np.broadcast_to(direction, (n, 3)),
+        v[f[:, 0]], v[f[:, 1]], v[f[:, 2]], eps=0.0,
+    )  # fmt: skip
+    hit = inside & (t > 0)
     if not hit.any():
         return None
     return origin + float(t[hit].min()) * direction
