@@ -86,7 +86,7 @@ def add_track_parser(sub) -> None:
                    help="the structure's label (required for label series)")  # fmt: skip
     p.add_argument("--cine", action="store_true",
                    help="IMAGES are cine intensity series: track by image registration")  # fmt: skip
-    p.add_argument("--control-point-spacing", type=positive_float, default=10.0, metavar="MM",
+    p.add_argument("--control-point-spacing", type=positive_float, default=20.0, metavar="MM",
                    help="with --cine: spacing of the B-spline control points (mm)")  # fmt: skip
     p.add_argument("--iterations", type=nonnegative_int, default=30,
                    help="with --cine: optimiser iterations per resolution level")  # fmt: skip

@@ -68,7 +68,7 @@ class CineTrackingSettings:
 
     Attributes
     ----------
-    control_point_spacing : float, default 10.0
+    control_point_spacing : float, default 20.0
         Distance between the B-spline control points, mm (the FFD's only
         regularisation: a coarser grid gives a smoother deformation).
     metric : {"mean_squares", "mattes"}, default "mean_squares"
@@ -102,7 +102,7 @@ class CineTrackingSettings:
         a setting of the computation, not of the result (left out of :meth:`key`).
     """
 
-    control_point_spacing: float = 10.0
+    control_point_spacing: float = 20.0
     metric: str = "mean_squares"
     histogram_bins: int = 32
     optimizer: str = "lbfgsb"
