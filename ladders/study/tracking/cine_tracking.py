@@ -36,7 +36,8 @@ Conventions
 * Deterministic given the settings: the metric samples its voxels at random with a
   fixed ``seed`` (or uses every voxel with ``sampling_percentage=None``), and the
   registration runs on ``threads`` threads (1 by default; the result is reproducible
-  for a fixed thread count).
+  for a fixed thread count on a given machine: ITK's global default number of threads,
+  the machine's cores, also enters it).
 """
 
 from __future__ import annotations
@@ -94,7 +95,9 @@ class CineTrackingSettings:
     combine : {"both", "forward"}, default "both"
         Average the forward and backward chains (UK Biobank) or keep the forward one.
     threads : int, default 1
-        Threads of each registration (1: bit-for-bit reproducible).
+        Threads of each registration (1: bit-for-bit reproducible on a given machine;
+        the image filters inside a registration use ITK's global default number of
+        threads, the machine's cores, which also enters the result).
     jobs : int, default 1
         Registrations run at a time (joblib processes). The registrations of a series
         are independent of each other (only moving the points along the chains is
