@@ -46,6 +46,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_cycle_study import null_splits  # noqa: E402
 from generated_tables import machine, publish  # noqa: E402
 
 from ladders.statistics import binomial_interval, detection_power, dice  # noqa: E402
@@ -154,13 +155,8 @@ def _tracking_error(c, names, frames, matrices, faces):
 def _null_rates(motion, controls, rng, repetitions: int, permutations: int):
     """Null FWER of the peak test, max-t and TFCE, on random halves of the controls."""
     hits = np.zeros(2, dtype=int)
-    for _ in range(repetitions):
-        order = rng.permutation(controls)
-        half = len(order) // 2
-        keep = np.sort(order[: 2 * half])
-        sub = CycleMotion(tuple(motion.subjects[i] for i in keep), motion.displacement[keep],
-                          motion.atlas, motion.faces)  # fmt: skip
-        tests = compare_cycles(sub, np.isin(keep, order[:half]), permutations, rng, tfce=True)
+    for sub, labels in null_splits(motion, controls, rng, repetitions):
+        tests = compare_cycles(sub, labels, permutations, rng, tfce=True)
         hits += [(tests.peak.p_fwer < 0.05).any(),
                  (tests.peak_tfce.p_fwer_enhanced < 0.05).any()]  # fmt: skip
     return [(h / repetitions, *binomial_interval(int(h), repetitions)) for h in hits]

@@ -71,15 +71,23 @@ def run_studies(work: Path, n: int, n_frames: int, jobs: int) -> None:
                   flush=True)  # fmt: skip
 
 
-def _null_rate(motion: CycleMotion, controls, rng, repetitions: int, permutations: int):
-    hits = 0
+def null_splits(motion: CycleMotion, controls, rng, repetitions: int):
+    """``repetitions`` random halves of the controls: ``(motion of the two halves, labels)``.
+
+    Each split is drawn from ``rng`` when it is requested, so a caller that also draws
+    its permutations from ``rng`` between splits keeps one reproducible stream."""
     for _ in range(repetitions):
         order = rng.permutation(controls)
         half = len(order) // 2
         keep = np.sort(order[: 2 * half])
-        labels = np.isin(keep, order[:half])
         sub = CycleMotion(tuple(motion.subjects[i] for i in keep), motion.displacement[keep],
                           motion.atlas, motion.faces)  # fmt: skip
+        yield sub, np.isin(keep, order[:half])
+
+
+def _null_rate(motion: CycleMotion, controls, rng, repetitions: int, permutations: int):
+    hits = 0
+    for sub, labels in null_splits(motion, controls, rng, repetitions):
         hits += bool((compare_cycles(sub, labels, permutations, rng).peak.p_fwer < 0.05).any())
     return hits / repetitions, *binomial_interval(hits, repetitions)
 

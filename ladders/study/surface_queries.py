@@ -13,10 +13,11 @@ tens of times faster than a tree rebuilt in Python for every moved mesh
 triangles included). :func:`line_hits` returns every intersection of each line
 with the surface within ``max_distance`` of its origin: the tree proposes the
 triangles a line meets, and each intersection is recomputed in double precision
-(Moller-Trumbore), so that it does not depend on the triangles' orientation. A line passing exactly
-through an edge or a vertex can be missed by the floating-point ray-triangle test,
-so :mod:`ladders.study.wall_motion` re-examines the lines with no intersection at
-all by its own test, which includes edges and vertices with a tolerance.
+(Moller-Trumbore), so that it does not depend on the triangles' orientation. A
+line passing exactly through an edge or a vertex can be missed by the tree's
+floating-point ray-triangle test, so :mod:`ladders.study.wall_motion` re-examines
+the lines left without an intersection it can use (one facing the vertex's way) by its
+exhaustive candidate search, which meets edges and corners with a tolerance.
 """
 
 from __future__ import annotations

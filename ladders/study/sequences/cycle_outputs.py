@@ -30,7 +30,7 @@ __all__ = ["write_cycle_tests"]
 
 def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     a, b = tests.labels, ~tests.labels
-    return {
+    columns = {
         "peak_group1_mm": tests.peaks[a].mean(axis=0),
         "peak_group2_mm": tests.peaks[b].mean(axis=0),
         "peak_t": tests.peak.statistic,
@@ -40,15 +40,11 @@ def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
         "time_t": tests.time_to_peak.statistic,
         "time_p_fwer": tests.time_to_peak.p_fwer,
         "frames_min_p_fwer": tests.per_frame.p_fwer.min(axis=0),
-        **(
-            {}
-            if tests.peak_tfce is None
-            else {
-                "peak_tfce": tests.peak_tfce.enhanced,
-                "peak_tfce_p_fwer": tests.peak_tfce.p_fwer_enhanced,
-            }
-        ),
     }
+    if tests.peak_tfce is not None:
+        columns["peak_tfce"] = tests.peak_tfce.enhanced
+        columns["peak_tfce_p_fwer"] = tests.peak_tfce.p_fwer_enhanced
+    return columns
 
 
 def _csv(header, rows) -> str:
