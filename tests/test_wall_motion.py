@@ -173,6 +173,32 @@ def test_past_the_rim_of_an_open_target_the_closest_point_is_taken_and_marked():
     )
 
 
+def test_a_hit_far_beyond_the_closest_point_is_a_detour_and_takes_the_closest_point():
+    """A sphere of radius 10 with a hole at its top, and a cap of radius 20 above it facing the
+    same way: through the hole a normal line meets the far cap, about 10 away, while the hole's
+    rim is about 2 away. With ``max_detour`` those vertices take the closest point."""
+    v, f = _sphere(10.0, 3)
+    keep = f[v[f].mean(axis=1)[:, 2] < 9.8]
+    used, new = np.unique(keep, return_inverse=True)
+    lower_v, lower_f = v[used], new.reshape(-1, 3)
+    cap_v, cap_f = _open_cap(*_sphere(20.0, 4), 19.5)
+    tv = np.vstack([lower_v, cap_v])
+    tf = np.vstack([lower_f, cap_f + len(lower_v)])
+    plain = normal_wall_motion(v, f, tv, tf, max_distance=15.0)
+    guarded = normal_wall_motion(v, f, tv, tf, max_distance=15.0, max_detour=2.0)
+    through = plain.hit & (np.abs(plain.distance) > 5.0)
+    assert through.sum() >= 3 and np.abs(plain.distance[through] - 10.0).max() < 0.5
+    gap = trimesh.proximity.closest_point(trimesh.Trimesh(tv, tf, process=False), v)[1]
+    assert (gap[through] < 3.0).all()
+    assert not guarded.hit[through].any()
+    moved = np.linalg.norm(guarded.points - v, axis=1)  # the closest point (ties: any of them)
+    np.testing.assert_allclose(moved[through], gap[through], atol=1e-9)
+    np.testing.assert_array_equal(guarded.hit[~through], plain.hit[~through])
+    np.testing.assert_allclose(guarded.points[~through], plain.points[~through], atol=1e-12)
+    with pytest.raises(ValueError, match="max_detour"):
+        normal_wall_motion(v, f, tv, tf, max_detour=-1.0)
+
+
 def test_matches_the_all_pairs_definition_on_irregular_surfaces():
     """The candidate pruning loses no triangle: same answer as every (vertex, triangle) pair."""
     cohort = make_synthetic_cohort(2, n_vertices=241)

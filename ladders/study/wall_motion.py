@@ -129,8 +129,9 @@ def _line_hits(origins, directions, tv, tf, max_distance, chunk=200_000):
 
 
 def normal_wall_motion(
-    vertices, faces, target_vertices, target_faces, *, max_distance: float | None = None
-) -> NormalProjection:
+    vertices, faces, target_vertices, target_faces, *, max_distance: float | None = None,
+    max_detour: float | None = None,
+) -> NormalProjection:  # fmt: skip
     """Move every vertex of ``(vertices, faces)`` along its normal onto the target (see module).
 
     Parameters
@@ -142,6 +143,11 @@ def normal_wall_motion(
     max_distance : float, optional
         Ignore intersections farther than this (default: a fifth of the target's
         bounding-box diagonal).
+    max_detour : float, optional
+        An intersection farther from the vertex than the closest point of the target by
+        more than this is taken for another part of the surface (a line through a
+        narrow cavity near an apex, past a staircase of thick slices): the vertex takes
+        the closest point instead (``hit`` False). None (default): no such test.
 
     Returns
     -------
@@ -153,6 +159,8 @@ def normal_wall_motion(
         max_distance = 0.2 * float(np.linalg.norm(tv.max(0) - tv.min(0)))
     elif not (np.isfinite(max_distance) and max_distance > 0):
         raise ValueError(f"normal_wall_motion: max_distance: expected > 0, got {max_distance}")
+    if max_detour is not None and not (np.isfinite(max_detour) and max_detour >= 0):
+        raise ValueError(f"normal_wall_motion: max_detour: expected >= 0, got {max_detour}")
     normals = outward_vertex_normals(v, f)
     target_normals = _outward_face_normals(tv, tf)
 
@@ -177,7 +185,11 @@ def normal_wall_motion(
     points = np.zeros((len(v), 3))
     hit[vertex[nearest]] = True
     points[vertex[nearest]] = loc[nearest]
-    if not hit.all():
+    if max_detour is not None:
+        closest, gap = closest_points(v, tv, tf)[:2]
+        hit &= np.linalg.norm(points - v, axis=1) <= gap + max_detour
+        points[~hit] = closest[~hit]
+    elif not hit.all():
         points[~hit] = closest_points(v[~hit], tv, tf)[0]
     distance = np.einsum("ij,ij->i", points - v, normals)
     return NormalProjection(points, distance, hit, normals)

@@ -78,6 +78,13 @@ def add_cycle_parsers(sub) -> None:
     q.add_argument("--tfce", action="store_true",
                    help="also test the peak with threshold-free cluster enhancement on the "
                         "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
+    q.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
+                   help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
+                        "landmark table's row 'atlas'): places the AHA segments for "
+                        "--exclude-segments")  # fmt: skip
+    q.add_argument("--exclude-segments", type=int, nargs="+", default=None, metavar="SEGMENT",
+                   help="AHA segments (1-17) left out of the tests, e.g. 17, the apical cap "
+                        "thick short-axis slices resolve poorly; needs --aha")  # fmt: skip
     q.add_argument("--output", "-o", type=output_folder, default=None,
                    help="folder of the results (default: STUDY/analysis)")  # fmt: skip
     q.set_defaults(run=run_cycle_analyze_command, output_is_file=False)
@@ -124,6 +131,34 @@ def _two_groups(table: dict, compare, subjects) -> tuple[dict, tuple[str, str]]:
     return {s: g == names[0] for s, g in present.items() if g in names}, tuple(names)
 
 
+def _tested_segments(args, motion):
+    """The vertices tested: all, or those outside ``--exclude-segments`` (None: all)."""
+    if args.exclude_segments is None:
+        if args.aha is not None:
+            raise UsageError("symladders cycle-analyze: error: --aha: only used with "
+                             "--exclude-segments")  # fmt: skip
+        return None
+    import numpy as np
+
+    from ..cohort.aha_segments import check_segments
+    from ..population import read_aha_landmarks
+    from ..population.aha_model import aha_segments
+
+    if args.aha is None:
+        raise UsageError("symladders cycle-analyze: error: --exclude-segments: needs --aha "
+                         "(the atlas's landmarks that place the segments)")  # fmt: skip
+    try:
+        excluded = check_segments(args.exclude_segments, "--exclude-segments")
+        lm = read_aha_landmarks(args.aha)
+        labels = aha_segments(motion.atlas, lm.apex, lm.base, lm.septum, motion.faces)
+    except ValueError as exc:
+        raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
+    tested = ~np.isin(labels, excluded)
+    if tested.sum() < 2:
+        raise UsageError("symladders cycle-analyze: error: --exclude-segments: no vertex left")
+    return tested
+
+
 def run_cycle_analyze_command(args) -> int:
     """Compare two groups' cycles from parsed arguments."""
     import numpy as np
@@ -138,9 +173,11 @@ def run_cycle_analyze_command(args) -> int:
         keep = [i for i, s in enumerate(motion.subjects) if s in labels]
         motion = type(motion)(tuple(motion.subjects[i] for i in keep),
                               motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
+    tested = _tested_segments(args, motion)
     try:
         tests = compare_cycles(motion, labels, args.permutations,
-                               np.random.default_rng(args.seed), tfce=args.tfce)  # fmt: skip
+                               np.random.default_rng(args.seed), tfce=args.tfce,
+                               vertices=tested)  # fmt: skip
     except ValueError as exc:  # e.g. a group of fewer than 3 subjects
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
     output = Path(args.output) if args.output else Path(args.study) / "analysis"
@@ -153,6 +190,8 @@ def run_cycle_analyze_command(args) -> int:
         f"FWER 5 %: peak {found[0]}"
         + ("" if tests.peak_tfce is None
            else f" (TFCE: {int((tests.peak_tfce.p_fwer_enhanced < 0.05).sum())})")
-        + f", time to peak {found[1]}, some frame {frames}; in {output}"
+        + f", time to peak {found[1]}, some frame {frames}"
+        + ("" if tested is None else f" (of {int(tested.sum())} vertices tested)")
+        + f"; in {output}"
     )  # fmt: skip
     return 0

@@ -11,7 +11,14 @@ import argparse
 import sys
 from pathlib import Path
 
-from .cli_types import DefaultsFormatter, UsageError, jobs_count, nonnegative_int, output_folder
+from .cli_types import (
+    DefaultsFormatter,
+    UsageError,
+    jobs_count,
+    nonnegative_float,
+    nonnegative_int,
+    output_folder,
+)
 
 __all__ = ["add_mesh_parser", "run_mesh_command"]
 
@@ -38,16 +45,6 @@ def _plane(text: str) -> tuple[float, ...]:
             f"expected a point and a normal as x,y,z,nx,ny,nz (mm), got {text!r}"
         )
     return values
-
-
-def _nonnegative_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
 
 
 def _lid_angle(text: str) -> float | None:
@@ -116,7 +113,7 @@ def add_mesh_parser(sub) -> None:
                    help="folder of the meshes")  # fmt: skip
     p.add_argument("--vertices", type=nonnegative_int, default=2000,
                    help="target vertex count of each mesh (0: no decimation)")  # fmt: skip
-    p.add_argument("--mask-sigma", type=_nonnegative_float, default=0.5,
+    p.add_argument("--mask-sigma", type=nonnegative_float, default=0.5,
                    help="Gaussian smoothing of the mask before marching cubes, in voxels")  # fmt: skip
     p.add_argument("--taubin-iterations", type=nonnegative_int, default=20,
                    help="iterations of Taubin (volume-preserving) smoothing of the surface")  # fmt: skip
@@ -124,7 +121,7 @@ def add_mesh_parser(sub) -> None:
                    help="remove the surface beyond this plane (mm), e.g. the valve plane")  # fmt: skip
     p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
                    help="CSV with the columns image,x,y,z,nx,ny,nz: a cut plane per image file")  # fmt: skip
-    p.add_argument("--cut-margin", type=_nonnegative_float, default=0.5,
+    p.add_argument("--cut-margin", type=nonnegative_float, default=0.5,
                    help="move the cut plane this many voxel widths against its normal, so that "
                         "the lid a label makes at the valve plane goes (0: cut at the plane)")  # fmt: skip
     p.add_argument("--lid-angle", type=_lid_angle, default=None, metavar="DEG",

@@ -17,6 +17,7 @@ from .cli_types import (
     UsageError,
     existing_folder,
     jobs_count,
+    nonnegative_float,
     nonnegative_int,
     output_folder,
     positive_float,
@@ -69,6 +70,8 @@ def add_track_parser(sub) -> None:
             "'symladders mesh' does and the mesh is moved from frame to frame onto it (affine "
             "fit and normal projection, or an LDDMM registration); with --refine-ed every frame "
             "is also reached from ED directly and the two results are combined (less drift). "
+            "The ED mesh is first moved along its normals onto ED's surface meshed like the "
+            "other frames, so that the motion is measured between surfaces extracted alike. "
             "OUTPUT holds <subject>/frame_<kk>.vtk (the atlas's faces), <subject>.json "
             "(provenance and per-frame quality) and tracking.csv. A failing subject is recorded "
             "with its reason and the others finish (exit 1); a rerun skips the subjects done "
@@ -100,12 +103,20 @@ def add_track_parser(sub) -> None:
                    help="frame to frame: affine fit then normal projection, or LDDMM registration")  # fmt: skip
     p.add_argument("--refine-ed", action="store_true",
                    help="also move ED onto every frame directly and combine (limits the drift)")  # fmt: skip
+    p.add_argument("--keep-ed", action="store_true",
+                   help="frame 0 is the ED mesh as given, not moved along its normals onto ED's "
+                        "surface meshed like the other frames (the difference between the two "
+                        "extractions then enters every frame's motion)")  # fmt: skip
     p.add_argument("--crop-distance", type=positive_float, default=8.0,
                    help="ignore the parts of a frame's surface farther than this (mm) from the "
                         "mesh moved onto it (the lid at the valve plane); must exceed the motion "
                         "between two frames")  # fmt: skip
     p.add_argument("--vertices", type=nonnegative_int, default=2000,
                    help="target vertex count of each frame's surface (0: no decimation)")  # fmt: skip
+    p.add_argument("--mask-sigma", type=nonnegative_float, default=1.5, metavar="VOXELS",
+                   help="Gaussian smoothing of each frame's label before meshing (voxels of each "
+                        "axis); more than 'symladders mesh' uses, since the staircase of thick "
+                        "slices enters the motion")  # fmt: skip
     p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
                    help="CSV with the columns image,x,y,z,nx,ny,nz[,frame]: the valve plane of a "
                         "subject (image: its name or its series' file name), for one frame or, "
@@ -136,7 +147,8 @@ def run_track_command(args) -> int:
         else:
             settings = TrackingSettings(
                 method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
-                meshing=MeshingSettings(n_vertices=args.vertices or None),
+                project_ed=not args.keep_ed, meshing=MeshingSettings(n_vertices=args.vertices or None,
+                                        mask_sigma=args.mask_sigma),
             )  # fmt: skip
         label = 0 if args.label is None else args.label
         outcome = track_cohort(args.meshes, args.images, args.output, label, settings,

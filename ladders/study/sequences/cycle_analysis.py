@@ -12,6 +12,10 @@ error by the maximum statistic):
 * the time to that peak, as a fraction of the cycle, refined between frames by the
   parabola through the peak frame and its two neighbours, FWER over the vertices.
 
+With ``vertices`` only part of the atlas is tested (e.g. without the apical cap, AHA
+segment 17, which thick short-axis slices resolve poorly): the FWER is over those
+vertices, and the others have ``NaN`` statistics and p-values.
+
 With ``tfce=True`` the peak is also tested with threshold-free cluster enhancement
 on the atlas's mesh (:func:`~ladders.statistics.glm_test`, ``H = 2``, ``E = 1``, FWER
 over the vertices of the enhanced maps): a regional effect measured through noisy
@@ -22,7 +26,7 @@ wall, do not (``docs/tracking.md``).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -157,6 +161,8 @@ class CycleTests:
     peak_tfce : GLMTest or None
         With ``tfce=True``: the peak's ``t`` (first group minus second) and its
         threshold-free cluster enhancement, ``p_fwer_enhanced`` per vertex.
+    tested : ndarray of bool, shape (k,), or None
+        The vertices tested (the others have ``NaN`` maps); None: all.
     """
 
     per_frame: VertexwiseTest
@@ -166,6 +172,45 @@ class CycleTests:
     times: np.ndarray
     labels: np.ndarray
     peak_tfce: GLMTest | None = None
+    tested: np.ndarray | None = None
+
+
+#: The per-vertex maps of a GLMTest.
+_GLM_MAPS = ("statistic", "p_uncorrected", "p_fwer", "enhanced", "p_fwer_enhanced")
+
+
+def _tested(vertices, k: int) -> np.ndarray:
+    if vertices is None:
+        return np.ones(k, dtype=bool)
+    mask = np.asarray(vertices)
+    if mask.shape != (k,) or mask.dtype != bool:
+        raise ValueError(f"vertices: expected {k} booleans (one per atlas vertex), got an array "
+                         f"of shape {mask.shape} and type {mask.dtype}")  # fmt: skip
+    if mask.sum() < 2:
+        raise ValueError(f"vertices: expected at least 2 vertices tested, got {int(mask.sum())}")
+    return mask
+
+
+def _sub_faces(faces: np.ndarray, tested: np.ndarray) -> np.ndarray:
+    """The triangles between tested vertices, indexed among them."""
+    index = np.cumsum(tested) - 1
+    return index[faces[tested[faces].all(axis=1)]]
+
+
+def _spread(values, tested: np.ndarray):
+    """A map over the tested vertices, on every vertex (``NaN`` where not tested)."""
+    if values is None:
+        return None
+    values = np.asarray(values, dtype=np.float64)
+    out = np.full(values.shape[:-1] + tested.shape, np.nan)
+    out[..., tested] = values
+    return out
+
+
+def _spread_test(test: VertexwiseTest, tested: np.ndarray) -> VertexwiseTest:
+    return replace(test, statistic=_spread(test.statistic, tested),
+                   p_uncorrected=_spread(test.p_uncorrected, tested),
+                   p_fwer=_spread(test.p_fwer, tested))  # fmt: skip
 
 
 def _reshaped(test: VertexwiseTest, shape) -> VertexwiseTest:
@@ -180,6 +225,7 @@ def compare_cycles(
     n_permutations: int = 5000,
     rng: np.random.Generator | None = None,
     tfce: bool = False,
+    vertices=None,
 ) -> CycleTests:
     """Test two groups' cycles per frame and on the peak and time to peak (see the module).
 
@@ -193,6 +239,9 @@ def compare_cycles(
         Draws the permutations (required); the tests use one stream.
     tfce : bool, default False
         Also test the peak with threshold-free cluster enhancement on the atlas's mesh.
+    vertices : array of bool, shape (k,), optional
+        The atlas's vertices tested (default all); TFCE runs on the triangles between
+        them.
 
     Returns
     -------
@@ -208,14 +257,23 @@ def compare_cycles(
         raise ValueError(f"groups: expected {len(motion.subjects)} labels, got {labels.shape}")
     curves = motion.normal()
     n, n_frames, k = curves.shape
-    per_frame = vertexwise_test(curves.reshape(n, n_frames * k), labels, n_permutations, rng)
+    tested = _tested(vertices, k)
+    m = int(tested.sum())
     peaks, times = curve_peaks(curves)
-    peak = vertexwise_test(peaks, labels, n_permutations, rng)
-    timing = vertexwise_test(times, labels, n_permutations, rng)
+    per_frame = vertexwise_test(curves[..., tested].reshape(n, n_frames * m), labels,
+                                n_permutations, rng)  # fmt: skip
+    peak = vertexwise_test(peaks[:, tested], labels, n_permutations, rng)
+    timing = vertexwise_test(times[:, tested], labels, n_permutations, rng)
     enhanced = None
     if tfce:
         design = np.c_[labels.astype(float), (~labels).astype(float)]  # the two group means
-        enhanced = glm_test(peaks, design, np.array([[1.0, -1.0]]), n_permutations, rng,
-                            method="manly", tfce=mesh_adjacency(motion.faces, k))  # fmt: skip
-    return CycleTests(_reshaped(per_frame, (n_frames, k)), peak, timing, peaks, times, labels,
-                      enhanced)  # fmt: skip
+        faces = _sub_faces(motion.faces, tested)
+        enhanced = glm_test(peaks[:, tested], design, np.array([[1.0, -1.0]]), n_permutations,
+                            rng, method="manly", tfce=mesh_adjacency(faces, m))  # fmt: skip
+        if m < k:
+            enhanced = replace(enhanced, **{f: _spread(getattr(enhanced, f), tested)
+                                            for f in _GLM_MAPS})  # fmt: skip
+    per_frame = _reshaped(per_frame, (n_frames, m))
+    if m < k:
+        per_frame, peak, timing = (_spread_test(t, tested) for t in (per_frame, peak, timing))
+    return CycleTests(per_frame, peak, timing, peaks, times, labels, enhanced, tested)

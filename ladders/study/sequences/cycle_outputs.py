@@ -5,7 +5,8 @@ Written by :func:`write_cycle_tests` into one folder:
 * ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm) and
   time to peak (fraction of the cycle), their ``t`` and FWER-corrected p, the
   smallest per-frame p, and with the peak's TFCE test its enhanced map and FWER p
-  (``peak_tfce``, ``peak_tfce_p_fwer``);
+  (``peak_tfce``, ``peak_tfce_p_fwer``); when only some vertices were tested, a
+  ``tested`` column (1 or 0) and ``nan`` statistics elsewhere;
 * ``cycle_frames.csv``: per frame, its fraction of the cycle, the vertices found at
   FWER 5 % (vertices and frames together) and the largest ``|t|``;
 * ``cycle_tests.vtu``: the atlas with those per-vertex columns as point data;
@@ -44,6 +45,8 @@ def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     if tests.peak_tfce is not None:
         columns["peak_tfce"] = tests.peak_tfce.enhanced
         columns["peak_tfce_p_fwer"] = tests.peak_tfce.p_fwer_enhanced
+    if tests.tested is not None and not tests.tested.all():
+        columns["tested"] = tests.tested.astype(float)
     return columns
 
 
@@ -78,7 +81,7 @@ def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("gr
     frames = folder / "cycle_frames.csv"
     pf = tests.per_frame
     rows = [[t, f"{motion.fractions[t]:.4f}", int((pf.p_fwer[t] < alpha).sum()),
-             f"{np.abs(pf.statistic[t]).max():.4g}"] for t in range(pf.statistic.shape[0])]  # fmt: skip
+             f"{np.nanmax(np.abs(pf.statistic[t])):.4g}"] for t in range(pf.statistic.shape[0])]  # fmt: skip
     atomic_write_text(frames, _csv(["frame", "fraction", f"vertices_p_fwer_below_{alpha:g}",
                                     "max_abs_t"], rows))  # fmt: skip
     vtu = write_point_mesh(folder / "cycle_tests.vtu", motion.atlas, motion.faces, columns)
@@ -94,7 +97,8 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
     import matplotlib.pyplot as plt
 
     found = tests.peak.p_fwer < alpha
-    where = found if found.any() else np.ones_like(found)
+    tested = np.ones_like(found) if tests.tested is None else tests.tested
+    where = found if found.any() else tested
     curves = motion.normal()[:, :, where].mean(axis=2)  # (n_subjects, n_frames)
     x = np.append(motion.fractions, 1.0)
     fig, ax = plt.subplots(figsize=(5.5, 3.4))
@@ -104,7 +108,8 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
         sd = np.append(c.std(axis=0), c.std(axis=0)[0])
         ax.plot(x, mean, color=colour, label=f"{name} ({len(c)})")
         ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.2, lw=0)
-    what = f"{int(found.sum())} vertices whose peak differs" if found.any() else "all vertices"
+    what = (f"{int(found.sum())} vertices whose peak differs" if found.any()
+            else "all vertices tested")  # fmt: skip
     ax.set(xlabel="fraction of the cycle", ylabel="normal motion (mm, inward < 0)",
            title=f"mean over {what}")  # fmt: skip
     ax.legend(frameon=False)

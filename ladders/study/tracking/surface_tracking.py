@@ -64,8 +64,9 @@ class TrackedSurfaces:
     Attributes
     ----------
     vertices : ndarray, shape (n_frames, k, 3)
-        The tracked mesh at every frame (mm; frame 0 is the ED mesh as given), in the
-        frame of the surfaces.
+        The tracked mesh at every frame (mm; frame 0 is the ED mesh moved along its
+        normals onto frame 0's surface with ``settings.project_ed``, else the ED mesh as
+        given), in the frame of the surfaces.
     faces : ndarray of int, shape (f, 3)
         The mesh's triangles (the atlas's), shared by every frame.
     quality : list of dict
@@ -75,7 +76,8 @@ class TrackedSurfaces:
         ``converged`` and ``n_iter`` (registration), ``weight_ed`` and ``drift_rms``
         (with ``refine_ed``: the weight of the direct result and the RMS distance
         between the chain's and the direct result, mm), ``kept_faces`` (fraction of the
-        surface kept by the crop).
+        surface kept by the crop); at frame 0 with ``project_ed``, ``onto_surface_rms``
+        (RMS motion of the given ED mesh onto frame 0's surface, mm).
     settings : TrackingSettings
     """
 
@@ -148,6 +150,12 @@ def _point_affine(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     return out
 
 
+def _onto(vertices, faces, tv, tf, settings: TrackingSettings):
+    """Each vertex along its normal onto the surface ``(tv, tf)``, with the settings' limits."""
+    return normal_wall_motion(vertices, faces, tv, tf, max_distance=settings.normal_max_distance,
+                              max_detour=settings.max_detour)  # fmt: skip
+
+
 def _projection(start, faces, tv, tf, settings: TrackingSettings, guess=None):
     """The affine fit of ``start`` onto the surface, then along its normals onto it.
 
@@ -157,8 +165,7 @@ def _projection(start, faces, tv, tf, settings: TrackingSettings, guess=None):
     moved = apply_affine(warm, start)
     matrix = affine_icp(moved, faces, tv, tf, iterations=settings.affine_iterations,
                         tol=settings.affine_tol) @ warm  # fmt: skip
-    proj = normal_wall_motion(apply_affine(matrix, start), faces, tv, tf,
-                              max_distance=settings.normal_max_distance)  # fmt: skip
+    proj = _onto(apply_affine(matrix, start), faces, tv, tf, settings)
     return proj.points, {"hit_fraction": float(proj.hit.mean())}
 
 
@@ -179,9 +186,7 @@ def _step(start, faces, target, about, settings: TrackingSettings, frame: int, g
 def _combine(chain, direct, weight, faces, cropped, settings: TrackingSettings) -> np.ndarray:
     """The weighted mean of two results on a surface, projected back onto it along its normals."""
     mean = (1.0 - weight) * chain + weight * direct
-    return normal_wall_motion(
-        mean, faces, *cropped, max_distance=settings.normal_max_distance
-    ).points
+    return _onto(mean, faces, *cropped, settings).points
 
 
 def _frames(frame_surfaces) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -236,10 +241,16 @@ def track_surfaces(
     surfaces = _frames(frame_surfaces)
     n = len(surfaces)
     tracked = np.empty((n, len(ed), 3))
-    tracked[0] = ed
     quality = [
         {"step_rms": 0.0, **({"weight_ed": 0.0, "drift_rms": 0.0} if settings.refine_ed else {})}
     ]
+    if settings.project_ed:
+        tv, tf, kept = _cropped(surfaces[0], ed, faces, settings, 0)
+        onto = _onto(ed, faces, tv, tf, settings)
+        quality[0].update(onto_surface_rms=_rms(onto.points - ed), hit_fraction=onto.hit_fraction,
+                          kept_faces=kept)  # fmt: skip
+        ed = onto.points
+    tracked[0] = ed
     for t in range(1, n):
         previous = tracked[t - 1]
         points, info, cropped = _step(previous, faces, surfaces[t], previous, settings, t)
