@@ -31,7 +31,8 @@ Measured per cohort:
   splits of the controls, with a binomial interval, by the maximum statistic and with
   threshold-free cluster enhancement on the atlas (``compare_cycles(..., tfce=True)``);
   beside the same tests on the true frames (the meshes in correspondence); each also
-  without the atlas's apical cap (AHA segment 17, ``vertices=`` of ``compare_cycles``).
+  without the atlas's apical cap (AHA segment 17, ``vertices=`` of ``compare_cycles``)
+  for the motions without transport.
 """
 
 from __future__ import annotations
@@ -211,7 +212,8 @@ def rows(work: Path, n: int, n_frames: int, seconds: dict, permutations, repetit
                                 load_cycle_motion(root / "cycle_study"), error, per_subject))  # fmt: skip
         region = c.data.region.affected
         for label, motion, err, per_subject in motions:
-            for tested in (None, ~_apical_cap(motion.atlas, motion.faces)):
+            masks = [None] if "pole ladder" in label else [None, ~_apical_cap(atlas, faces)]
+            for tested in masks:
                 scores = _scores(motion, c, region, permutations, repetitions, rng, tested)
                 what = label if tested is None else f"{label}, without segment 17"
                 out.append((name, what, len(motion.subjects), err, per_subject, *scores))
