@@ -115,8 +115,8 @@ def add_track_parser(sub) -> None:
                    help="target vertex count of each frame's surface (0: no decimation)")  # fmt: skip
     p.add_argument("--mask-sigma", type=nonnegative_float, default=1.5, metavar="VOXELS",
                    help="Gaussian smoothing of each frame's label before meshing (voxels of each "
-                        "axis); more than 'symladders mesh' uses, since the staircase of thick "
-                        "slices enters the motion")  # fmt: skip
+                        "axis); more than 'symladders mesh' uses: on thick slices it lowers the "
+                        "noise of the tracked motion")  # fmt: skip
     p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
                    help="CSV with the columns image,x,y,z,nx,ny,nz[,frame]: the valve plane of a "
                         "subject (image: its name or its series' file name), for one frame or, "

@@ -75,9 +75,8 @@ class TrackingSettings:
         How :func:`~.cohort_tracking.track_cohort` meshes each frame of a label series
         (:func:`~ladders.study.imaging.surface_extraction.extract_surface`). Default:
         ``MeshingSettings(mask_sigma=1.5)``, more smoothing than ``symladders mesh``'s
-        0.5 voxel: the staircase of thick slices moves with the wall from frame to frame
-        and enters the motion; measured on 8 mm short-axis series, 1.5 voxels
-        halves the error of the peak inward motion and raises the power of the peak
+        0.5 voxel: measured on 8 mm short-axis series, it lowers the error of the peak
+        inward motion and its spread across subjects, and raises the power of the peak
         test (generated ``tracking_variants`` in ``docs/tracking.md``).
     """
 
