@@ -15,6 +15,12 @@ transform fixed to the identity). Before each step the frame's surface is croppe
 to the triangles within ``crop_distance`` of the moving mesh, so that a lid closing
 the label at the valve plane or another structure does not pull the mesh.
 
+Frame 0 is the ED mesh moved along its normals onto frame 0's surface
+(``settings.project_ed``), so that every frame's motion is measured between surfaces
+extracted alike; every normal projection takes the closest point instead of a hit
+that detours more than ``settings.max_detour`` past it (a line that crossed to
+another part of the surface).
+
 A chain of small steps drifts: every step adds its own error along the wall, and
 nothing brings the vertices back. With ``refine_ed`` every frame is also reached
 from end-diastole directly (one step from the ED mesh, the surface cropped about the
