@@ -39,7 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_cycle_routes import _apical_cap, _cycles, _tracked, _tracking_error  # noqa: E402
 from generated_tables import machine, publish  # noqa: E402
 
-from ladders.statistics import detection_power, dice  # noqa: E402
+from ladders.statistics import detection_power, dice, vertexwise_test  # noqa: E402
 from ladders.study.imaging import MeshingSettings  # noqa: E402
 from ladders.study.meshes.mesh_io import read_mesh  # noqa: E402
 from ladders.study.sequences import CycleMotion, compare_cycles, curve_peaks  # noqa: E402
@@ -84,17 +84,12 @@ def _tests(motion, patients, region, tested, permutations):
 
 
 def _cap_share(peaks, patients, cap, permutations: int) -> float:
-    """Share of the permutation maxima of ``|t|`` (two-sample, pooled) that fall in the cap."""
+    """Share of the permutation maxima of ``|t|`` over the vertices that fall in the cap."""
     rng = np.random.default_rng(1)
-    n1, n2 = patients.sum(), (~patients).sum()
-    usable = peaks.std(axis=0) > 0  # a vertex that does not move (the apex's tip) has no t
     inside = 0
-    for _ in range(permutations):
-        g = rng.permutation(patients)
-        a, b = peaks[g][:, usable], peaks[~g][:, usable]
-        pooled = ((n1 - 1) * a.var(0, ddof=1) + (n2 - 1) * b.var(0, ddof=1)) / (n1 + n2 - 2)
-        t = (a.mean(0) - b.mean(0)) / np.sqrt(pooled * (1 / n1 + 1 / n2))
-        inside += bool(cap[usable][np.argmax(np.abs(t))])
+    for _ in range(permutations):  # the t map of each permutation of the groups
+        t = vertexwise_test(peaks, rng.permutation(patients), 1, rng).statistic
+        inside += bool(cap[np.argmax(np.abs(t))])
     return inside / permutations
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 
 from .cli_types import DefaultsFormatter, UsageError, nonnegative_int, output_folder, positive_int
-from .cohort_cycle_cli import add_cycle_arguments, run_cycle_cohort
+from .cohort_cycle_cli import ED_ES_DEFAULTS, add_cycle_arguments, run_cycle_cohort
 
 __all__ = ["add_cohort_parser", "run_cohort_command"]
 
@@ -144,7 +144,7 @@ def add_cohort_parser(sub) -> None:
     p.add_argument("--noise", type=_nonnegative, default=0.0,
                    help="segmentation noise: RMS of a smooth normal displacement of every "
                         "ED and ES mesh, in mm")  # fmt: skip
-    p.add_argument("--noise-length", type=_nonnegative, default=10.0,
+    p.add_argument("--noise-length", type=_nonnegative, default=ED_ES_DEFAULTS["noise_length"],
                    help="correlation length of that noise, in mm")  # fmt: skip
     p.add_argument("--remesh", type=_nonnegative, default=None, metavar="FACTOR",
                    help="give every subject mesh another triangulation with FACTOR times the "
@@ -184,7 +184,8 @@ def add_cohort_parser(sub) -> None:
                    help="write design.csv with the default covariates even without the options above")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
     p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
-    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk",
+    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"),
+                   default=ED_ES_DEFAULTS["ext"],
                    help="mesh format")  # fmt: skip
     add_cycle_arguments(p)
     p.set_defaults(run=run_cohort_command, output_is_file=False)

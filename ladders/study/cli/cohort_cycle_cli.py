@@ -20,8 +20,8 @@ __all__ = ["add_cycle_arguments", "run_cycle_cohort"]
 #: Options of the ED/ES cohort that the whole-cycle cohort does not take.
 _EXCLUSIVE = ("noise", "remesh", "pose", "group", "anatomy", "imbalance", "age_effect",
               "sex_effect", "body_size_sd")  # fmt: skip
-#: Options of the ED-ES cohort with a default, refused with --cycle when changed.
-_DEFAULTS = {"noise_length": 10.0, "ext": "vtk"}
+#: Defaults of options of the ED-ES cohort (its parser's), refused with --cycle when changed.
+ED_ES_DEFAULTS = {"noise_length": 10.0, "ext": "vtk"}
 
 
 def _voxel(text: str) -> tuple[float, float]:
@@ -78,7 +78,7 @@ def run_cycle_cohort(args, abnormality) -> int:
     from ..population import make_two_group_cycles, write_cycle_cohort
 
     given = [o for o in _EXCLUSIVE if getattr(args, o, None) not in (None, False, 0.0)]
-    given += [o for o, default in _DEFAULTS.items() if getattr(args, o, default) != default]
+    given += [o for o, default in ED_ES_DEFAULTS.items() if getattr(args, o, default) != default]
     if given or args.design:
         flag = "--" + (given[0] if given else "design")
         raise UsageError(f"symladders cohort: error: {flag.replace('_', '-')}: not with --cycle")

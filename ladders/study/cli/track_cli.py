@@ -145,10 +145,10 @@ def run_track_command(args) -> int:
                 else args.registration_jobs,
             )
         else:
+            meshing = MeshingSettings(n_vertices=args.vertices or None, mask_sigma=args.mask_sigma)
             settings = TrackingSettings(
                 method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
-                project_ed=not args.keep_ed, meshing=MeshingSettings(n_vertices=args.vertices or None,
-                                        mask_sigma=args.mask_sigma),
+                project_ed=not args.keep_ed, meshing=meshing,
             )  # fmt: skip
         label = 0 if args.label is None else args.label
         outcome = track_cohort(args.meshes, args.images, args.output, label, settings,

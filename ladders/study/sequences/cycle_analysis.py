@@ -175,8 +175,9 @@ class CycleTests:
     tested: np.ndarray | None = None
 
 
-#: The per-vertex maps of a GLMTest.
-_GLM_MAPS = ("statistic", "p_uncorrected", "p_fwer", "enhanced", "p_fwer_enhanced")
+#: The per-vertex maps of a VertexwiseTest, and those a GLMTest adds.
+_MAPS = ("statistic", "p_uncorrected", "p_fwer")
+_GLM_MAPS = (*_MAPS, "enhanced", "p_fwer_enhanced")
 
 
 def _tested(vertices, k: int) -> np.ndarray:
@@ -207,10 +208,9 @@ def _spread(values, tested: np.ndarray):
     return out
 
 
-def _spread_test(test: VertexwiseTest, tested: np.ndarray) -> VertexwiseTest:
-    return replace(test, statistic=_spread(test.statistic, tested),
-                   p_uncorrected=_spread(test.p_uncorrected, tested),
-                   p_fwer=_spread(test.p_fwer, tested))  # fmt: skip
+def _spread_maps(result, tested: np.ndarray, fields=_MAPS):
+    """``result`` (a VertexwiseTest or GLMTest) with its maps spread onto every vertex."""
+    return replace(result, **{f: _spread(getattr(result, f), tested) for f in fields})
 
 
 def _reshaped(test: VertexwiseTest, shape) -> VertexwiseTest:
@@ -271,9 +271,8 @@ def compare_cycles(
         enhanced = glm_test(peaks[:, tested], design, np.array([[1.0, -1.0]]), n_permutations,
                             rng, method="manly", tfce=mesh_adjacency(faces, m))  # fmt: skip
         if m < k:
-            enhanced = replace(enhanced, **{f: _spread(getattr(enhanced, f), tested)
-                                            for f in _GLM_MAPS})  # fmt: skip
+            enhanced = _spread_maps(enhanced, tested, _GLM_MAPS)
     per_frame = _reshaped(per_frame, (n_frames, m))
     if m < k:
-        per_frame, peak, timing = (_spread_test(t, tested) for t in (per_frame, peak, timing))
+        per_frame, peak, timing = (_spread_maps(t, tested) for t in (per_frame, peak, timing))
     return CycleTests(per_frame, peak, timing, peaks, times, labels, enhanced, tested)
