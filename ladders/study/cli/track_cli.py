@@ -93,9 +93,14 @@ def add_track_parser(sub) -> None:
                    help="with --cine: spacing of the B-spline control points (mm)")  # fmt: skip
     p.add_argument("--iterations", type=nonnegative_int, default=30,
                    help="with --cine: optimiser iterations per resolution level")  # fmt: skip
+    p.add_argument("--reference", choices=("ed", "consecutive"), default="ed",
+                   help="with --cine: register every frame to ED, started from its neighbour's "
+                        "fit (ed, default), or consecutive frames composed forward and backward "
+                        "(consecutive, as UK Biobank)")  # fmt: skip
     p.add_argument("--registration-jobs", type=jobs_count, default=1, metavar="N",
                    help="with --cine: registrations of a subject run N at a time (processes; the "
-                        "same result whatever N); with --jobs subjects at a time, use at most "
+                        "same result whatever N; with --reference ed, the two halves of the "
+                        "cycle: N = 2 at most); with --jobs subjects at a time, use at most "
                         "cores / jobs")  # fmt: skip
     p.add_argument("--output", "-o", type=output_folder, default="symladders-output/tracked",
                    help="folder of the tracked meshes")  # fmt: skip
@@ -140,6 +145,7 @@ def run_track_command(args) -> int:
             settings = CineTrackingSettings(
                 control_point_spacing=args.control_point_spacing,
                 iterations=max(1, args.iterations),
+                reference=args.reference,
                 jobs=(os.cpu_count() or 1)
                 if args.registration_jobs == -1
                 else args.registration_jobs,

@@ -7,14 +7,16 @@
   checked (:func:`find_series`, :func:`open_series`, :class:`SeriesError`);
 - :mod:`.cohort_tracking`: :func:`track_cohort`, every subject of a folder of
   corresponded meshes, resumable, with provenance (``symladders track``);
+- :mod:`.cine_settings`: :class:`CineTrackingSettings`;
 - :mod:`.cine_tracking`: :func:`track_cine`, the ED mesh moved through cine intensity
-  images by B-spline registrations between consecutive frames (SimpleITK), composed
-  forward and backward through the cycle.
+  images by B-spline registrations (SimpleITK), every frame to ED or consecutive frames
+  composed forward and backward through the cycle.
 
 See ``docs/tracking.md`` and ``docs/tracking_cine.md``.
 """
 
-from .cine_tracking import CineTrackingSettings, image_from_array, register_frames, track_cine
+from .cine_settings import CineTrackingSettings
+from .cine_tracking import image_from_array, register_frames, track_cine
 from .cohort_tracking import REPORT_FILE, TrackingOutcome, TrackingTask, plan_tracking, track_cohort
 from .label_series import LabelSeries, SeriesError, check_field_of_view, find_series, open_series
 from .settings import METHODS, TrackingSettings

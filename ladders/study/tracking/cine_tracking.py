@@ -1,21 +1,31 @@
 """Follow a mesh through cine intensity images by B-spline (FFD) image registration.
 
-The method of the UK Biobank motion pipeline (Bai et al., Nature Medicine 2020,
-``ukbb_cardiac``), with SimpleITK in place of MIRTK:
+Two schemes (``CineTrackingSettings.reference``), with SimpleITK's free-form
+deformation (a cubic B-spline transform on a grid of control points
+``control_point_spacing`` mm apart):
 
-1. every pair of consecutive frames is registered by a free-form deformation (a cubic
-   B-spline transform on a grid of control points ``control_point_spacing`` mm apart),
-   in both directions: ``k -> k + 1`` (forward) and ``k + 1 -> k`` (backward), the
-   cycle being periodic (frame ``n`` is frame 0, end-diastole, ED);
-2. the forward transforms are composed from ED to frame ``t``
-   (``0 -> 1 -> ... -> t``) and the backward ones from the next ED back to ``t``
-   (``n = 0 -> n - 1 -> ... -> t``); the composition is evaluated at the mesh's
-   points (each transform applied in turn), which is the exact composition at those
-   points;
-3. the two estimates of each ED point's position at ``t`` are averaged with weights by
-   the frame's position in the cycle, ``w_forward = 1 - t / n`` and
-   ``w_backward = t / n`` (``combine="both"``), so that each chain counts most where it
-   is short; ``combine="forward"`` keeps the forward chain only.
+* ``"ed"`` (default): every frame ``t`` is registered to end-diastole (ED) directly,
+  the B-spline started from the transform fitted at the neighbouring frame, along two
+  chains: forward ``1, 2, ...`` to the middle of the cycle (or to ``es_frame``) and
+  backward from the last frame. The ED vertices are moved by each frame's own
+  transform, so that no error is composed from frame to frame (the idea of
+  4Dsegment's refinement against ED, Duan et al., IEEE TMI 2019). ``n - 1``
+  registrations for ``n`` frames; the two chains run at the same time with ``jobs``.
+* ``"consecutive"``: the method of the UK Biobank motion pipeline (Bai et al., Nature
+  Medicine 2020, ``ukbb_cardiac``):
+
+  1. every pair of consecutive frames is registered, in both directions:
+     ``k -> k + 1`` (forward) and ``k + 1 -> k`` (backward), the cycle being periodic
+     (frame ``n`` is frame 0, ED);
+  2. the forward transforms are composed from ED to frame ``t``
+     (``0 -> 1 -> ... -> t``) and the backward ones from the next ED back to ``t``
+     (``n = 0 -> n - 1 -> ... -> t``); the composition is evaluated at the mesh's
+     points (each transform applied in turn), which is the exact composition at those
+     points;
+  3. the two estimates of each ED point's position at ``t`` are averaged with weights
+     by the frame's position in the cycle, ``w_forward = 1 - t / n`` and
+     ``w_backward = t / n`` (``combine="both"``), so that each chain counts most where
+     it is short; ``combine="forward"`` keeps the forward chain only.
 
 Conventions
 -----------
@@ -42,17 +52,11 @@ Conventions
 
 from __future__ import annotations
 
-import hashlib
-import json
-from dataclasses import asdict, dataclass
-
 import numpy as np
 
-__all__ = ["CineTrackingSettings", "register_frames", "track_cine", "image_from_array"]
+from .cine_settings import CineTrackingSettings
 
-_METRICS = ("mean_squares", "mattes")
-_OPTIMIZERS = ("lbfgsb", "gradient_descent")
-_COMBINE = ("both", "forward")
+__all__ = ["CineTrackingSettings", "register_frames", "track_cine", "image_from_array"]
 
 
 def _sitk():
@@ -61,122 +65,6 @@ def _sitk():
     except ImportError as error:  # pragma: no cover - a declared dependency
         raise ImportError("cine tracking needs SimpleITK: pip install 'SimpleITK>=2.3'") from error
     return sitk
-
-
-@dataclass(frozen=True)
-class CineTrackingSettings:
-    """Settings of the frame-to-frame B-spline registrations and their combination.
-
-    Attributes
-    ----------
-    control_point_spacing : float, default 20.0
-        Distance between the B-spline control points, mm (the FFD's only
-        regularisation: a coarser grid gives a smoother deformation).
-    metric : {"mean_squares", "mattes"}, default "mean_squares"
-        Mean squared intensity difference (consecutive cine frames share their
-        intensities) or Mattes mutual information (``histogram_bins`` bins).
-    histogram_bins : int, default 32
-    optimizer : {"lbfgsb", "gradient_descent"}, default "lbfgsb"
-    iterations : int, default 30
-        Iterations per resolution level.
-    shrink_factors : tuple of int, default (2, 1)
-        Down-sampling of the images per level, coarse to fine.
-    smoothing_sigmas : tuple of float, default (2.0, 0.0)
-        Gaussian smoothing per level, mm.
-    sampling_percentage : float or None, default 0.05
-        Fraction in ``(0, 1]`` of the voxels the metric samples at random (with
-        ``seed``, the same samples at every run); None uses every voxel. ITK evaluates
-        a B-spline transform's derivative densely (every sample touches every
-        parameter), so the cost of an iteration is about samples x control points:
-        every voxel with a fine grid is slow.
-    seed : int, default 0
-        Seed of the metric's random sampling (given to ITK as ``seed + 1``: ITK reads 0
-        as "seed from the wall clock").
-    combine : {"both", "forward"}, default "both"
-        Average the forward and backward chains (UK Biobank) or keep the forward one.
-    threads : int, default 1
-        Threads of each registration (1: bit-for-bit reproducible on a given machine;
-        the image filters inside a registration use ITK's global default number of
-        threads, the machine's cores, which also enters the result).
-    jobs : int, default 1
-        Registrations run at a time (joblib processes). The registrations of a series
-        are independent of each other (only moving the points along the chains is
-        sequential), so they run in parallel with the same results whatever ``jobs``:
-        a setting of the computation, not of the result (left out of :meth:`key`).
-    """
-
-    control_point_spacing: float = 20.0
-    metric: str = "mean_squares"
-    histogram_bins: int = 32
-    optimizer: str = "lbfgsb"
-    iterations: int = 30
-    shrink_factors: tuple = (2, 1)
-    smoothing_sigmas: tuple = (2.0, 0.0)
-    sampling_percentage: float | None = 0.05
-    seed: int = 0
-    combine: str = "both"
-    threads: int = 1
-    jobs: int = 1
-
-    def as_dict(self) -> dict:
-        """JSON-ready fields, with ``route: "cine"``."""
-        out = {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
-        return {"route": "cine", **out}
-
-    def key(self) -> str:
-        """Stable hash of every setting (what a stored result depends on)."""
-        fields = {k: v for k, v in self.as_dict().items() if k != "jobs"}
-        text = json.dumps(fields, sort_keys=True, default=repr)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-    def __post_init__(self):
-        cps = self.control_point_spacing
-        if (
-            isinstance(cps, bool)
-            or not isinstance(cps, (int, float, np.number))
-            or not (np.isfinite(cps) and cps > 0)
-        ):
-            raise ValueError(f"control_point_spacing: expected a length > 0 mm, got {cps!r}")
-        if self.metric not in _METRICS:
-            raise ValueError(f"metric: expected one of {_METRICS}, got {self.metric!r}")
-        if self.optimizer not in _OPTIMIZERS:
-            raise ValueError(f"optimizer: expected one of {_OPTIMIZERS}, got {self.optimizer!r}")
-        if self.combine not in _COMBINE:
-            raise ValueError(f"combine: expected one of {_COMBINE}, got {self.combine!r}")
-        for name in ("histogram_bins", "iterations", "threads", "jobs"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise ValueError(f"{name}: expected an integer >= 1, got {value!r}")
-        if (
-            isinstance(self.seed, bool)
-            or not isinstance(self.seed, (int, np.integer))
-            or not (0 <= self.seed < 2**31 - 1)
-        ):
-            raise ValueError(f"seed: expected an integer in [0, 2^31 - 1), got {self.seed!r}")
-        shrink, sigmas = tuple(self.shrink_factors), tuple(self.smoothing_sigmas)
-        if not shrink or any(
-            isinstance(s, bool) or not isinstance(s, (int, np.integer)) or s < 1 for s in shrink
-        ):
-            raise ValueError(
-                f"shrink_factors: expected integers >= 1, one per level, got {self.shrink_factors!r}"
-            )
-        if len(sigmas) != len(shrink) or any(
-            not (np.isfinite(float(s)) and float(s) >= 0) for s in sigmas
-        ):
-            raise ValueError(
-                f"smoothing_sigmas: expected {len(shrink)} numbers >= 0 mm (one per shrink "
-                f"factor), got {self.smoothing_sigmas!r}"
-            )
-        p = self.sampling_percentage
-        if p is not None and (
-            isinstance(p, bool) or not isinstance(p, (int, float, np.number))
-            or not (0 < p <= 1)
-        ):  # fmt: skip
-            raise ValueError(
-                f"sampling_percentage: expected None or a fraction in (0, 1], got {p!r}"
-            )
-        object.__setattr__(self, "shrink_factors", tuple(int(s) for s in shrink))
-        object.__setattr__(self, "smoothing_sigmas", tuple(float(s) for s in sigmas))
 
 
 def _check_affine(affine, name: str = "affine") -> np.ndarray:
@@ -247,12 +135,19 @@ def _grid_affine(spacing) -> np.ndarray:
     )
 
 
-def _register(fixed_image, moving_image, settings: CineTrackingSettings):
+def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial=None):
+    """The B-spline transform fitted from ``fixed`` to ``moving``, started from ``initial``.
+
+    ``initial`` is a transform fitted on a frame of the same grid (same control points),
+    whose parameters are the starting point; None starts from the identity.
+    """
     sitk = _sitk()
     size = np.asarray(fixed_image.GetSize(), dtype=float)
     extent = (size - 1.0) * np.asarray(fixed_image.GetSpacing())
     mesh = [max(1, int(round(e / settings.control_point_spacing))) for e in extent]
     transform = sitk.BSplineTransformInitializer(fixed_image, mesh, 3)
+    if initial is not None:
+        transform.SetParameters(initial.GetParameters())
     method = sitk.ImageRegistrationMethod()
     if settings.metric == "mean_squares":
         method.SetMetricAsMeanSquares()
@@ -415,6 +310,29 @@ def _registrations(series, affine, pairs, settings: CineTrackingSettings) -> lis
     )
 
 
+def _ed_chain(frames, affine, settings: CineTrackingSettings) -> list:
+    """Transforms from ``frames[0]`` (ED) to each later frame, each started from the last."""
+    ed = image_from_array(frames[0], affine)
+    out, previous = [], None
+    for frame in frames[1:]:
+        previous = _register(ed, image_from_array(frame, affine), settings, previous)
+        out.append(previous)
+    return out
+
+
+def _ed_chains(series, affine, chains, settings: CineTrackingSettings) -> dict:
+    """``{t: transform ED -> t}`` over the frame chains, ``settings.jobs`` chains at a time."""
+    if settings.jobs == 1 or len(chains) < 2:
+        fitted = [_ed_chain(series[[0, *chain]], affine, settings) for chain in chains]
+    else:
+        from joblib import Parallel, delayed
+
+        fitted = Parallel(n_jobs=min(settings.jobs, len(chains)))(
+            delayed(_ed_chain)(series[[0, *chain]], affine, settings) for chain in chains
+        )
+    return {t: T for chain, ts in zip(chains, fitted) for t, T in zip(chain, ts)}
+
+
 def _move(transform, points: np.ndarray) -> np.ndarray:
     return np.array([transform.TransformPoint(tuple(map(float, p))) for p in points])
 
@@ -428,6 +346,9 @@ def track_cine(
 ) -> np.ndarray:
     """Move the ED mesh through every frame of a cine series by FFD registration.
 
+    Each frame registered to ED, or consecutive frames composed
+    (``settings.reference``; see the module's description).
+
     Parameters
     ----------
     series : array (n_frames, X, Y, Z)
@@ -439,10 +360,12 @@ def track_cine(
         The mesh at ED, world mm, inside the image's field of view.
     settings : CineTrackingSettings, optional
     es_frame : int, optional
-        The end-systolic frame. None (default): the UK Biobank weights
-        ``w_forward = 1 - t / n``. Given: piecewise-linear weights from 1 at ED through
-        1/2 at ``es_frame`` to 0 at the next ED, so that both chains count equally at ES.
-        Ignored with ``combine="forward"``.
+        The end-systolic frame. With ``reference="ed"``: where the forward chain stops
+        and the backward one starts (default: frame ``n // 2``). With
+        ``reference="consecutive"``: None (default) gives the UK Biobank weights
+        ``w_forward = 1 - t / n``; given, piecewise-linear weights from 1 at ED through
+        1/2 at ``es_frame`` to 0 at the next ED, so that both chains count equally at
+        ES. Ignored with ``combine="forward"``.
 
     Returns
     -------
@@ -460,6 +383,18 @@ def track_cine(
     n = s.shape[0]
     v = _check_vertices(ed_vertices, a, s.shape[1:])
     es = _check_es_frame(es_frame, n)
+    if settings.reference == "ed":
+        if settings.combine == "forward":
+            chains = [list(range(1, n))]
+        else:  # forward to the middle (or ES), backward from the last frame over the rest
+            middle = n // 2 if es is None else es
+            chains = [list(range(1, middle + 1)), list(range(n - 1, middle, -1))]
+        transforms = _ed_chains(s, a, [c for c in chains if c], settings)
+        out = np.empty((n, len(v), 3))
+        out[0] = v
+        for t in range(1, n):
+            out[t] = _move(transforms[t], v)
+        return out
     # fixed frame t - 1, moving frame t: points move t - 1 -> t (forward, t = 1 .. n - 1);
     # fixed frame t + 1 (mod n), moving frame t: t + 1 -> t (backward, t = n - 1 .. 1)
     pairs = [(t - 1, t) for t in range(1, n)]

@@ -317,7 +317,7 @@ def track_cohort(
         The label meshed (e.g. the left-ventricle cavity).
     settings : TrackingSettings or CineTrackingSettings, optional
         With the meshing settings of the frames (``settings.meshing``). A
-        :class:`~.cine_tracking.CineTrackingSettings` tracks cine intensity series
+        :class:`~.cine_settings.CineTrackingSettings` tracks cine intensity series
         instead (:func:`~.cine_tracking.track_cine`: the frames are not meshed, the ED
         mesh is moved by B-spline registrations of the images; ``label`` and
         ``cut_planes`` are not used).
