@@ -115,7 +115,8 @@ def table(rows, n_subjects, n_frames, es_frame, settings=SETTINGS) -> str:
         f"{settings.shrink_factors}, sampling {settings.sampling_percentage:g}, "
         f"combine={settings.combine}, {settings.threads} thread(s), {settings.jobs} "
         "registration(s) at a time. Reference `ed`: every frame registered to ED, started "
-        "from its neighbour's fit (two chains, to mid-cycle and back from the last frame); "
+        "from its neighbour's fit (two chains, to mid-cycle and back from the last frame), "
+        f"the metric sampling the voxels within {settings.mask_distance:g} mm of an ED vertex; "
         "`consecutive`: consecutive frames registered and composed forward and backward (UK "
         "Biobank). Errors at ES, mean over vertices and subjects, mm.",
         "",

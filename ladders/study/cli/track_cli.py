@@ -97,6 +97,9 @@ def add_track_parser(sub) -> None:
                    help="with --cine: register every frame to ED, started from its neighbour's "
                         "fit (ed, default), or consecutive frames composed forward and backward "
                         "(consecutive, as UK Biobank)")  # fmt: skip
+    p.add_argument("--mask-distance", type=nonnegative_float, default=10.0, metavar="MM",
+                   help="with --cine and --reference ed: the metric samples the voxels within MM "
+                        "of an ED vertex (0: the whole image)")  # fmt: skip
     p.add_argument("--registration-jobs", type=jobs_count, default=1, metavar="N",
                    help="with --cine: registrations of a subject run N at a time (processes; the "
                         "same result whatever N; with --reference ed, the two halves of the "
@@ -146,6 +149,7 @@ def run_track_command(args) -> int:
                 control_point_spacing=args.control_point_spacing,
                 iterations=max(1, args.iterations),
                 reference=args.reference,
+                mask_distance=args.mask_distance or None,
                 jobs=(os.cpu_count() or 1)
                 if args.registration_jobs == -1
                 else args.registration_jobs,

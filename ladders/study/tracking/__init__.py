@@ -8,6 +8,8 @@
 - :mod:`.cohort_tracking`: :func:`track_cohort`, every subject of a folder of
   corresponded meshes, resumable, with provenance (``symladders track``);
 - :mod:`.cine_settings`: :class:`CineTrackingSettings`;
+- :mod:`.cine_images`: :func:`image_from_array` (numpy and affine to SimpleITK) and
+  :func:`wall_mask` (the voxels near a mesh, where the metric samples);
 - :mod:`.cine_tracking`: :func:`track_cine`, the ED mesh moved through cine intensity
   images by B-spline registrations (SimpleITK), every frame to ED or consecutive frames
   composed forward and backward through the cycle.
@@ -15,8 +17,9 @@
 See ``docs/tracking.md`` and ``docs/tracking_cine.md``.
 """
 
+from .cine_images import image_from_array, wall_mask
 from .cine_settings import CineTrackingSettings
-from .cine_tracking import image_from_array, register_frames, track_cine
+from .cine_tracking import register_frames, track_cine
 from .cohort_tracking import REPORT_FILE, TrackingOutcome, TrackingTask, plan_tracking, track_cohort
 from .label_series import LabelSeries, SeriesError, check_field_of_view, find_series, open_series
 from .settings import METHODS, TrackingSettings
@@ -27,6 +30,7 @@ __all__ = [
     "image_from_array",
     "register_frames",
     "track_cine",
+    "wall_mask",
     "METHODS",
     "TrackingSettings",
     "TrackedSurfaces",

@@ -42,6 +42,13 @@ class CineTrackingSettings:
         a B-spline transform's derivative densely (every sample touches every
         parameter), so the cost of an iteration is about samples x control points:
         every voxel with a fine grid is slow.
+    mask_distance : float or None, default 10.0
+        With ``reference="ed"``: the metric samples only the voxels of the ED frame (the
+        fixed image of every registration) whose centre lies within this distance (mm)
+        of an ED vertex, the neighbourhood of the wall that the tracking follows
+        (``sampling_percentage`` is then a fraction of those voxels); None samples the
+        whole image. Not used with ``reference="consecutive"``, whose fixed frames are
+        not ED: there the wall has moved away from that region.
     seed : int, default 0
         Seed of the metric's random sampling (given to ITK as ``seed + 1``: ITK reads 0
         as "seed from the wall clock").
@@ -78,6 +85,7 @@ class CineTrackingSettings:
     shrink_factors: tuple = (2, 1)
     smoothing_sigmas: tuple = (2.0, 0.0)
     sampling_percentage: float | None = 0.05
+    mask_distance: float | None = 10.0
     seed: int = 0
     reference: str = "ed"
     combine: str = "both"
@@ -135,6 +143,12 @@ class CineTrackingSettings:
                 f"smoothing_sigmas: expected {len(shrink)} numbers >= 0 mm (one per shrink "
                 f"factor), got {self.smoothing_sigmas!r}"
             )
+        d = self.mask_distance
+        if d is not None and (
+            isinstance(d, bool) or not isinstance(d, (int, float, np.number))
+            or not (np.isfinite(d) and d > 0)
+        ):  # fmt: skip
+            raise ValueError(f"mask_distance: expected None or a distance > 0 mm, got {d!r}")
         p = self.sampling_percentage
         if p is not None and (
             isinstance(p, bool) or not isinstance(p, (int, float, np.number))

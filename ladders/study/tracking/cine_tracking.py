@@ -54,92 +54,34 @@ from __future__ import annotations
 
 import numpy as np
 
+from .cine_images import (
+    _check_affine,
+    _check_mask,
+    _check_volume,
+    _grid_affine,
+    _mask_image,
+    _sitk,
+    image_from_array,
+    wall_mask,
+)
 from .cine_settings import CineTrackingSettings
 
-__all__ = ["CineTrackingSettings", "register_frames", "track_cine", "image_from_array"]
+__all__ = [
+    "CineTrackingSettings",
+    "register_frames",
+    "track_cine",
+    "image_from_array",
+    "wall_mask",
+]
 
 
-def _sitk():
-    try:
-        import SimpleITK as sitk
-    except ImportError as error:  # pragma: no cover - a declared dependency
-        raise ImportError("cine tracking needs SimpleITK: pip install 'SimpleITK>=2.3'") from error
-    return sitk
-
-
-def _check_affine(affine, name: str = "affine") -> np.ndarray:
-    try:
-        a = np.asarray(affine, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a 4 x 4 matrix of numbers") from None
-    if a.shape != (4, 4):
-        raise ValueError(f"{name}: expected a 4 x 4 matrix, got shape {a.shape}")
-    if not np.isfinite(a).all():
-        raise ValueError(f"{name}: NaN or infinite entries")
-    if not np.allclose(a[3], [0.0, 0.0, 0.0, 1.0]):
-        raise ValueError(f"{name}: the last row must be (0, 0, 0, 1), got {a[3].tolist()}")
-    if abs(np.linalg.det(a[:3, :3])) < 1e-9 * max(1.0, np.abs(a[:3, :3]).max() ** 3):
-        raise ValueError(f"{name}: singular (voxels of zero size)")
-    return a
-
-
-def _check_volume(volume, name: str) -> np.ndarray:
-    try:
-        v = np.asarray(volume, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name}: expected a 3-D array of intensities") from None
-    if v.ndim != 3:
-        raise ValueError(f"{name}: expected a 3-D array (X, Y, Z), got shape {v.shape}")
-    if min(v.shape) < 2:
-        raise ValueError(f"{name}: every axis needs at least 2 voxels, got shape {v.shape}")
-    if not np.isfinite(v).all():
-        raise ValueError(f"{name}: NaN or infinite intensities")
-    return v
-
-
-def image_from_array(volume, affine):
-    """A SimpleITK image of ``volume`` (X, Y, Z) whose physical space is the affine's world.
-
-    ITK index ``(i, j, k)`` is ``volume[i, j, k]``; origin ``affine[:3, 3]``, spacing the
-    column norms of ``affine[:3, :3]``, direction the normalised columns (no LPS/RAS
-    flip: see the module's conventions).
-    """
-    sitk = _sitk()
-    a = _check_affine(affine)
-    v = _check_volume(volume, "volume")
-    matrix = a[:3, :3]
-    spacing = np.linalg.norm(matrix, axis=0)
-    image = sitk.GetImageFromArray(np.ascontiguousarray(v.transpose(2, 1, 0), dtype=np.float32))
-    image.SetSpacing(spacing.tolist())
-    image.SetDirection((matrix / spacing).ravel().tolist())
-    image.SetOrigin(a[:3, 3].tolist())
-    return image
-
-
-def _grid_affine(spacing) -> np.ndarray:
-    """The affine from ``spacing``: a 4 x 4 affine, or 3 voxel sizes (origin 0, axes aligned)."""
-    try:
-        s = np.asarray(spacing, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError("spacing: expected 3 voxel sizes in mm or a 4 x 4 affine") from None
-    if s.shape == (4, 4):
-        return _check_affine(s, "spacing")
-    if s.shape == (3,):
-        if not (np.isfinite(s).all() and (s > 0).all()):
-            raise ValueError(f"spacing: expected 3 voxel sizes > 0 mm, got {s.tolist()}")
-        a = np.eye(4)
-        a[:3, :3] = np.diag(s)
-        return a
-    raise ValueError(
-        f"spacing: expected 3 voxel sizes in mm or a 4 x 4 affine, got shape {s.shape}"
-    )
-
-
-def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial=None):
+def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial=None, mask=None):
     """The B-spline transform fitted from ``fixed`` to ``moving``, started from ``initial``.
 
     ``initial`` is a transform fitted on a frame of the same grid (same control points),
-    whose parameters are the starting point; None starts from the identity.
+    whose parameters are the starting point; None starts from the identity. ``mask``
+    (array ``(X, Y, Z)`` of 0 and 1 on the fixed grid, or None) restricts the metric's
+    samples to its voxels, ``sampling_percentage`` then being a fraction of those.
     """
     sitk = _sitk()
     size = np.asarray(fixed_image.GetSize(), dtype=float)
@@ -158,9 +100,12 @@ def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial
     else:
         method.SetMetricSamplingStrategy(method.RANDOM)
         # SimpleITK reads a seed of 0 as "seed from the wall clock": shift by one
-        method.SetMetricSamplingPercentage(
-            float(settings.sampling_percentage), int(settings.seed) + 1
-        )
+        fraction = float(settings.sampling_percentage)
+        if mask is not None:  # ITK draws from every voxel, then drops those outside
+            fraction = min(1.0, fraction * mask.size / max(1, int(mask.sum())))
+        method.SetMetricSamplingPercentage(fraction, int(settings.seed) + 1)
+    if mask is not None:
+        method.SetMetricFixedMask(_mask_image(mask, fixed_image))
     method.SetInterpolator(sitk.sitkLinear)
     if settings.optimizer == "lbfgsb":
         method.SetOptimizerAsLBFGSB(
@@ -192,7 +137,9 @@ def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial
     return transform
 
 
-def register_frames(fixed, moving, spacing, settings: CineTrackingSettings | None = None):
+def register_frames(
+    fixed, moving, spacing, settings: CineTrackingSettings | None = None, mask=None
+):
     """B-spline (FFD) registration of two frames: the transform from fixed to moving points.
 
     Parameters
@@ -202,6 +149,10 @@ def register_frames(fixed, moving, spacing, settings: CineTrackingSettings | Non
     spacing : 3 floats or array (4, 4)
         The grid: voxel sizes in mm (axes aligned, origin 0) or the voxel-to-world affine.
     settings : CineTrackingSettings, optional
+    mask : array (X, Y, Z) of 0 and 1, optional
+        The voxels of the fixed frame the metric samples (e.g. :func:`wall_mask`);
+        ``settings.sampling_percentage`` is then a fraction of them. None: every voxel
+        (``settings.mask_distance`` is for :func:`track_cine`, which builds the mask).
 
     Returns
     -------
@@ -214,7 +165,7 @@ def register_frames(fixed, moving, spacing, settings: CineTrackingSettings | Non
     Raises
     ------
     ValueError
-        Naming ``fixed``, ``moving``, ``spacing`` or ``settings``.
+        Naming ``fixed``, ``moving``, ``spacing``, ``settings`` or ``mask``.
     """
     settings = _check_settings(settings)
     a = _grid_affine(spacing)
@@ -222,7 +173,8 @@ def register_frames(fixed, moving, spacing, settings: CineTrackingSettings | Non
     m = _check_volume(moving, "moving")
     if f.shape != m.shape:
         raise ValueError(f"moving: shape {m.shape} differs from fixed's {f.shape}")
-    return _register(image_from_array(f, a), image_from_array(m, a), settings)
+    mask = None if mask is None else _check_mask(mask, f.shape, "fixed")
+    return _register(image_from_array(f, a), image_from_array(m, a), settings, mask=mask)
 
 
 def _check_settings(settings) -> CineTrackingSettings:
@@ -294,41 +246,42 @@ def _forward_weights(n: int, es_frame: int | None) -> np.ndarray:
     return np.where(t <= es_frame, 1.0 - 0.5 * t / es_frame, 0.5 * (n - t) / (n - es_frame))
 
 
-def _register_pair(fixed, moving, affine, settings):
-    return _register(image_from_array(fixed, affine), image_from_array(moving, affine), settings)
+def _register_pair(fixed, moving, affine, settings, mask=None):
+    fixed_image = image_from_array(fixed, affine)
+    return _register(fixed_image, image_from_array(moving, affine), settings, mask=mask)
 
 
-def _registrations(series, affine, pairs, settings: CineTrackingSettings) -> list:
+def _registrations(series, affine, pairs, settings: CineTrackingSettings, mask=None) -> list:
     """The transforms of the frame pairs ``(fixed, moving)``, ``settings.jobs`` at a time."""
     if settings.jobs == 1 or len(pairs) < 2:
         images = [image_from_array(frame, affine) for frame in series]
-        return [_register(images[i], images[j], settings) for i, j in pairs]
+        return [_register(images[i], images[j], settings, mask=mask) for i, j in pairs]
     from joblib import Parallel, delayed
 
     return Parallel(n_jobs=min(settings.jobs, len(pairs)))(
-        delayed(_register_pair)(series[i], series[j], affine, settings) for i, j in pairs
+        delayed(_register_pair)(series[i], series[j], affine, settings, mask) for i, j in pairs
     )
 
 
-def _ed_chain(frames, affine, settings: CineTrackingSettings) -> list:
+def _ed_chain(frames, affine, settings: CineTrackingSettings, mask=None) -> list:
     """Transforms from ``frames[0]`` (ED) to each later frame, each started from the last."""
     ed = image_from_array(frames[0], affine)
     out, previous = [], None
     for frame in frames[1:]:
-        previous = _register(ed, image_from_array(frame, affine), settings, previous)
+        previous = _register(ed, image_from_array(frame, affine), settings, previous, mask)
         out.append(previous)
     return out
 
 
-def _ed_chains(series, affine, chains, settings: CineTrackingSettings) -> dict:
+def _ed_chains(series, affine, chains, settings: CineTrackingSettings, mask=None) -> dict:
     """``{t: transform ED -> t}`` over the frame chains, ``settings.jobs`` chains at a time."""
     if settings.jobs == 1 or len(chains) < 2:
-        fitted = [_ed_chain(series[[0, *chain]], affine, settings) for chain in chains]
+        fitted = [_ed_chain(series[[0, *chain]], affine, settings, mask) for chain in chains]
     else:
         from joblib import Parallel, delayed
 
         fitted = Parallel(n_jobs=min(settings.jobs, len(chains)))(
-            delayed(_ed_chain)(series[[0, *chain]], affine, settings) for chain in chains
+            delayed(_ed_chain)(series[[0, *chain]], affine, settings, mask) for chain in chains
         )
     return {t: T for chain, ts in zip(chains, fitted) for t, T in zip(chain, ts)}
 
@@ -343,6 +296,7 @@ def track_cine(
     ed_vertices,
     settings: CineTrackingSettings | None = None,
     es_frame: int | None = None,
+    mask=None,
 ) -> np.ndarray:
     """Move the ED mesh through every frame of a cine series by FFD registration.
 
@@ -366,6 +320,10 @@ def track_cine(
         ``w_forward = 1 - t / n``; given, piecewise-linear weights from 1 at ED through
         1/2 at ``es_frame`` to 0 at the next ED, so that both chains count equally at
         ES. Ignored with ``combine="forward"``.
+    mask : array (X, Y, Z) of 0 and 1, optional
+        With ``reference="ed"``: the voxels of the ED frame the metric samples, in place
+        of :func:`wall_mask` of ``ed_vertices`` within ``settings.mask_distance`` (e.g.
+        to track more points than the wall's while sampling the wall).
 
     Returns
     -------
@@ -375,7 +333,8 @@ def track_cine(
     Raises
     ------
     ValueError
-        Naming ``series``, ``affine``, ``ed_vertices``, ``settings`` or ``es_frame``.
+        Naming ``series``, ``affine``, ``ed_vertices``, ``settings``, ``es_frame`` or
+        ``mask``.
     """
     settings = _check_settings(settings)
     s = _check_series(series)
@@ -383,13 +342,19 @@ def track_cine(
     n = s.shape[0]
     v = _check_vertices(ed_vertices, a, s.shape[1:])
     es = _check_es_frame(es_frame, n)
+    if mask is not None:
+        if settings.reference != "ed":
+            raise ValueError("mask: used with reference='ed' only (the fixed frame is ED)")
+        mask = _check_mask(mask, s.shape[1:], "the series' frames")
     if settings.reference == "ed":
+        if mask is None and settings.mask_distance is not None:  # around ED's wall
+            mask = wall_mask(s.shape[1:], a, v, settings.mask_distance)
         if settings.combine == "forward":
             chains = [list(range(1, n))]
         else:  # forward to the middle (or ES), backward from the last frame over the rest
             middle = n // 2 if es is None else es
             chains = [list(range(1, middle + 1)), list(range(n - 1, middle, -1))]
-        transforms = _ed_chains(s, a, [c for c in chains if c], settings)
+        transforms = _ed_chains(s, a, [c for c in chains if c], settings, mask)
         out = np.empty((n, len(v), 3))
         out[0] = v
         for t in range(1, n):
