@@ -325,6 +325,13 @@ def test_a_flipped_grid_tracks_in_its_world_frame():
         (dict(ed_vertices=np.zeros((3, 2))), "ed_vertices"),
         (dict(es_frame=5), "es_frame"),
         (dict(settings="fast"), "settings"),
+        (
+            dict(
+                ed_vertices=np.array([[1.5, 1.5, 1.5]]),
+                settings=CineTrackingSettings(mask_distance=0.01),
+            ),
+            "mask_distance",
+        ),  # fmt: skip
         (dict(mask=np.ones((3, 3, 3))), "mask"),
         (dict(mask=np.zeros((4, 4, 4))), "mask"),
         (dict(mask=np.ones((4, 4, 4)), settings=CONSECUTIVE), "mask"),

@@ -349,6 +349,12 @@ def track_cine(
     if settings.reference == "ed":
         if mask is None and settings.mask_distance is not None:  # around ED's wall
             mask = wall_mask(s.shape[1:], a, v, settings.mask_distance)
+            if not mask.any():
+                raise ValueError(
+                    f"settings.mask_distance: no voxel centre lies within "
+                    f"{settings.mask_distance:g} mm of an ED vertex; give a larger distance "
+                    "or None (the whole image)"
+                )
         if settings.combine == "forward":
             chains = [list(range(1, n))]
         else:  # forward to the middle (or ES), backward from the last frame over the rest
