@@ -8,8 +8,7 @@ settings), tracked to end-systole (ES) with every frame registered to ED (the fo
 chain of ``reference="ed"``). Three questions, each answered against the truth:
 
 1. **Can the B-spline hold the true motion?** The cubic B-spline on the tracking's
-   control grid (the grid ``_register`` builds: ``round(extent / spacing)`` intervals
-   per axis) is fitted by weighted least squares to the true displacement
+   control grid (``identity_bspline``) is fitted by weighted least squares to the true displacement
    (``motion_forward``) at the voxel centres of a grid of every second voxel in-plane
    and every slice, voxels within 15 mm of the ED mesh weighted 1 and the others 0.01.
    Its error at the ED vertices, split along the true ES normals and across them, and
@@ -26,7 +25,6 @@ its error, points at the optimisation, not at the transform model or the metric.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -37,22 +35,18 @@ from scipy.spatial import cKDTree
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_cine_tracking import GRIDS, SETTINGS, grid, twist  # noqa: E402
-from generated_tables import machine, publish  # noqa: E402
+from bench_cine_tracking import GRIDS, SETTINGS, grid, split_error, twist  # noqa: E402
+from generated_tables import publishing_main  # noqa: E402
 
 from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward  # noqa: E402
-from ladders.study.imaging import TagGrid, render_cine  # noqa: E402
-from ladders.study.tracking import image_from_array, track_cine, wall_mask  # noqa: E402
-from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
+from ladders.study.imaging import (  # noqa: E402
+    TagGrid,
+    render_cine,
+    voxel_centres,  # noqa: E402
+)
+from ladders.study.tracking import identity_bspline, image_from_array, track_cine, wall_mask  # noqa: E402
 
 N_FRAMES = 25
-
-
-def _split(moved, truth, faces):
-    error = moved - truth
-    n = outward_vertex_normals(truth, faces)
-    along = np.einsum("ij,ij->i", error, n)
-    return np.abs(along).mean(), np.linalg.norm(error - along[:, None] * n, axis=1).mean()
 
 
 def _best_bspline(frame, affine, shape, params, ed, f, near):
@@ -61,14 +55,11 @@ def _best_bspline(frame, affine, shape, params, ed, f, near):
     Returns the ED vertices and the points ``near`` moved by it."""
     import SimpleITK as sitk
 
-    image = image_from_array(frame, affine)
-    size = np.asarray(image.GetSize(), float)
-    extent = (size - 1.0) * np.asarray(image.GetSpacing())
-    mesh = [max(1, int(round(e / SETTINGS.control_point_spacing))) for e in extent]
-    transform = sitk.BSplineTransformInitializer(image, mesh, 3)
+    transform = identity_bspline(image_from_array(frame, affine), SETTINGS.control_point_spacing)
     n_params = transform.GetNumberOfParameters()
     sample = [int(shape[0] // 2), int(shape[1] // 2), int(shape[2])]
-    step = [affine[0, 0] * 2, affine[1, 1] * 2, affine[2, 2]]
+    sample_affine = affine @ np.diag([2.0, 2.0, 1.0, 1.0])  # the grid is axis-aligned
+    step = np.diag(sample_affine)[:3].tolist()
     origin = affine[:3, 3].tolist()
     basis = []
     for k in range(n_params // 3):  # the x-coefficients' basis; y and z share it
@@ -80,8 +71,7 @@ def _best_bspline(frame, affine, shape, params, ed, f, near):
         )
         basis.append(sitk.GetArrayFromImage(field)[..., 0].transpose(2, 1, 0).reshape(-1))
     b = np.stack(basis, 1)
-    index = np.stack(np.meshgrid(*map(np.arange, sample), indexing="ij"), -1).reshape(-1, 3)
-    x = index * np.asarray(step) + np.asarray(origin)
+    x = voxel_centres(sample_affine, sample)
     y = motion_forward(params, x, f)
     w = np.where(cKDTree(ed).query(x)[0] < 15.0, 1.0, 0.01)
     coef = [np.linalg.lstsq(b * w[:, None], (y - x)[:, d] * w, rcond=None)[0] for d in range(3)]
@@ -99,8 +89,7 @@ def run() -> list[tuple]:
     es = int(round(0.35 * N_FRAMES))
     fractions = cycle_fraction(np.arange(N_FRAMES) / N_FRAMES, es / N_FRAMES)
     affine, shape = grid(GRIDS["short-axis 1.5 x 1.5 x 8 mm"])
-    index = np.stack(np.meshgrid(*map(np.arange, shape), indexing="ij"), -1).reshape(-1, 3)
-    voxels = index @ affine[:3, :3].T + affine[:3, 3]
+    voxels = voxel_centres(affine, shape)
     near = voxels[cKDTree(ed).query(voxels)[0] < 10.0]
     inverse = np.linalg.inv(affine[:3, :3])
     truth_es = motion_forward(params, ed, fractions[es])
@@ -126,8 +115,8 @@ def run() -> list[tuple]:
         truth_twist = twist(params, ed, truth_es)
         rows.append((
             "yes" if tagging else "no",
-            *_split(fit_ed, truth_es, cohort.faces), abs(twist(params, ed, fit_ed) - truth_twist),
-            *_split(best, truth_es, cohort.faces), abs(twist(params, ed, best) - truth_twist),
+            *split_error(fit_ed, truth_es, cohort.faces), abs(twist(params, ed, fit_ed) - truth_twist),
+            *split_error(best, truth_es, cohort.faces), abs(twist(params, ed, best) - truth_twist),
             metric(near), metric(motion_forward(params, near, fractions[es])),
             metric(best_near), metric(fit_near),
         ))  # fmt: skip
@@ -158,14 +147,7 @@ def _table(rows) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--publish", action="store_true")
-    args = parser.parse_args(argv)
-    print(machine(), flush=True)
-    table = _table(run())
-    print("\n" + table)
-    if args.publish:
-        publish("cine_causes", table, "python benchmarks/bench_cine_causes.py --publish")
+    publishing_main("cine_causes", __doc__, lambda: _table(run()), argv)
 
 
 if __name__ == "__main__":

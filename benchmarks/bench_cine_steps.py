@@ -16,7 +16,6 @@ and the recovered fraction ``<moved - ed, true - ed> / |true - ed|^2`` over all 
 
 from __future__ import annotations
 
-import argparse
 import sys
 import time
 from dataclasses import replace
@@ -27,7 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_cine_tracking import GRIDS, SETTINGS, grid  # noqa: E402
-from generated_tables import machine, publish  # noqa: E402
+from generated_tables import publishing_main  # noqa: E402
 
 from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward  # noqa: E402
 from ladders.study.imaging import TagGrid, render_cine  # noqa: E402
@@ -89,14 +88,7 @@ def _table(rows) -> str:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--publish", action="store_true")
-    args = parser.parse_args(argv)
-    print(machine(), flush=True)
-    table = _table(run())
-    print("\n" + table)
-    if args.publish:
-        publish("cine_steps", table, "python benchmarks/bench_cine_steps.py --publish")
+    publishing_main("cine_steps", __doc__, lambda: _table(run()), argv)
 
 
 if __name__ == "__main__":

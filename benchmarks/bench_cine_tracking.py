@@ -64,6 +64,16 @@ def twist(params, ed, es):
     return rotation_deg(ed[apex], es[apex]) - rotation_deg(ed[base], es[base])
 
 
+def split_error(moved, truth, faces) -> tuple[float, float]:
+    """Mean error of ``moved`` against ``truth`` (k, 3) along the true normals and across."""
+    error = moved - truth
+    n = outward_vertex_normals(truth, faces)
+    along = np.einsum("ij,ij->i", error, n)
+    return float(np.abs(along).mean()), float(
+        np.linalg.norm(error - along[:, None] * n, axis=1).mean()
+    )
+
+
 def run(n_subjects: int, n_frames: int, settings=SETTINGS, grids=tuple(GRIDS)):
     cohort = make_synthetic_cohort(n_subjects, n_vertices=241, seed=0)
     es_frame = int(round(0.35 * n_frames))
@@ -85,11 +95,9 @@ def run(n_subjects: int, n_frames: int, settings=SETTINGS, grids=tuple(GRIDS)):
                 tracked = track_cine(series, affine, ed, settings)
                 out["seconds"].append(time.perf_counter() - start)
                 truth = motion_forward(params, ed, fractions[es_frame])
-                error = tracked[es_frame] - truth
-                n = outward_vertex_normals(truth, cohort.faces)
-                along = np.einsum("ij,ij->i", error, n)
-                out["normal"].append(np.abs(along).mean())
-                out["tangential"].append(np.linalg.norm(error - along[:, None] * n, axis=1).mean())
+                normal, tangential = split_error(tracked[es_frame], truth, cohort.faces)
+                out["normal"].append(normal)
+                out["tangential"].append(tangential)
                 out["motion"].append(np.linalg.norm(truth - ed, axis=1).mean())
                 out["twist"].append(
                     abs(twist(params, ed, tracked[es_frame]) - twist(params, ed, truth))

@@ -107,6 +107,28 @@ def publish(name: str, table: str, command: str, *, folder=None, pages=None) -> 
     return path
 
 
+def publishing_main(name: str, doc: str, make_table, argv=None, *, folder=None, pages=None):
+    """The command line of a benchmark with one table: ``[--publish]``.
+
+    Prints the machine and the table ``make_table()`` measures; with ``--publish``
+    writes it as ``docs/generated/<name>.md`` (:func:`publish`; ``folder`` and ``pages``
+    as there), the command named after the calling script. Returns the table.
+    """
+    import argparse
+    import sys
+
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
+    parser.add_argument("--publish", action="store_true")
+    args = parser.parse_args(argv)
+    print(machine(), flush=True)
+    table = make_table()
+    print("\n" + table)
+    if args.publish:
+        script = Path(sys.argv[0]).name
+        publish(name, table, f"python benchmarks/{script} --publish", folder=folder, pages=pages)
+    return table
+
+
 def read_table(path) -> dict:
     """The machine line and the table of a file written by :func:`publish`.
 

@@ -81,3 +81,19 @@ def test_publish_rows_replaces_this_cpus_row_and_keeps_the_others(tmp_path):
         == f"intro\n<!-- BEGIN generated/t -->\n{text}<!-- END generated/t -->\nend\n"
     )
     assert not (ROOT / "docs" / "generated" / "t.md").exists()
+
+
+def test_publishing_main_writes_only_when_asked(tmp_path, capsys, monkeypatch):
+    """A benchmark's ``[--publish]`` command line: the table is printed with the machine,
+    and written (with the script's command) only with ``--publish``."""
+    monkeypatch.setattr(sys, "argv", ["bench_example.py"])
+    page = tmp_path / "page.md"
+    page.write_text("<!-- BEGIN generated/example -->\nold\n<!-- END generated/example -->\n")
+    kw = dict(folder=tmp_path / "generated", pages=[page])
+    table = generated_tables.publishing_main("example", "Doc.\nmore", lambda: "| 1 |\n", [], **kw)
+    assert table == "| 1 |\n" and "cores" in capsys.readouterr().out
+    assert not (tmp_path / "generated").exists() and "old" in page.read_text()
+    generated_tables.publishing_main("example", "Doc.", lambda: "| 2 |\n", ["--publish"], **kw)
+    written = (tmp_path / "generated" / "example.md").read_text()
+    assert "`python benchmarks/bench_example.py --publish`" in written and "| 2 |" in written
+    assert written in page.read_text() and "old" not in page.read_text()

@@ -19,7 +19,7 @@ See ``docs/tracking.md`` and ``docs/tracking_cine.md``.
 
 from .cine_images import image_from_array, wall_mask
 from .cine_settings import CineTrackingSettings
-from .cine_tracking import register_frames, track_cine
+from .cine_tracking import identity_bspline, register_frames, track_cine
 from .cohort_tracking import REPORT_FILE, TrackingOutcome, TrackingTask, plan_tracking, track_cohort
 from .label_series import LabelSeries, SeriesError, check_field_of_view, find_series, open_series
 from .settings import METHODS, TrackingSettings
@@ -31,6 +31,7 @@ __all__ = [
     "register_frames",
     "track_cine",
     "wall_mask",
+    "identity_bspline",
     "METHODS",
     "TrackingSettings",
     "TrackedSurfaces",

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..imaging.rv_label import voxel_centres
+
 __all__ = ["image_from_array", "wall_mask"]
 
 
@@ -126,7 +128,6 @@ def wall_mask(shape, affine, vertices, distance: float) -> np.ndarray:
     """
     from scipy.spatial import cKDTree
 
-    index = np.stack(np.meshgrid(*map(np.arange, shape), indexing="ij"), -1).reshape(-1, 3)
-    world = index @ affine[:3, :3].T + affine[:3, 3]
+    world = voxel_centres(affine, shape)
     near = cKDTree(np.asarray(vertices, float)).query(world, distance_upper_bound=distance)[0]
     return np.isfinite(near).reshape(tuple(shape)).astype(np.uint8)

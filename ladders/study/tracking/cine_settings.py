@@ -71,10 +71,12 @@ class CineTrackingSettings:
         the image filters inside a registration use ITK's global default number of
         threads, the machine's cores, which also enters the result).
     jobs : int, default 1
-        Registrations run at a time (joblib processes). The registrations of a series
+        Registrations run at a time (joblib processes), with the same results whatever
+        ``jobs``: a setting of the computation, not of the result (left out of
+        :meth:`key`). With ``reference="consecutive"`` the registrations of a series
         are independent of each other (only moving the points along the chains is
-        sequential), so they run in parallel with the same results whatever ``jobs``:
-        a setting of the computation, not of the result (left out of :meth:`key`).
+        sequential); with ``reference="ed"`` each chain is sequential, so at most its
+        two chains run at a time.
     """
 
     control_point_spacing: float = 20.0

@@ -72,7 +72,32 @@ __all__ = [
     "track_cine",
     "image_from_array",
     "wall_mask",
+    "identity_bspline",
 ]
+
+
+def identity_bspline(image, control_point_spacing: float):
+    """The identity cubic B-spline transform on the control grid the registrations use.
+
+    The grid covers ``image``'s extent with ``round(extent / control_point_spacing)``
+    intervals per axis (at least one).
+
+    Parameters
+    ----------
+    image : SimpleITK.Image
+        The fixed image (:func:`image_from_array`).
+    control_point_spacing : float
+        mm.
+
+    Returns
+    -------
+    SimpleITK.BSplineTransform
+    """
+    sitk = _sitk()
+    size = np.asarray(image.GetSize(), dtype=float)
+    extent = (size - 1.0) * np.asarray(image.GetSpacing())
+    mesh = [max(1, int(round(e / control_point_spacing))) for e in extent]
+    return sitk.BSplineTransformInitializer(image, mesh, 3)
 
 
 def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial=None, mask=None):
@@ -80,14 +105,13 @@ def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial
 
     ``initial`` is a transform fitted on a frame of the same grid (same control points),
     whose parameters are the starting point; None starts from the identity. ``mask``
-    (array ``(X, Y, Z)`` of 0 and 1 on the fixed grid, or None) restricts the metric's
-    samples to its voxels, ``sampling_percentage`` then being a fraction of those.
+    (an 8-bit SimpleITK image of 0 and 1 on the fixed grid, :func:`_mask_image`, or None)
+    restricts the metric's samples to its voxels, ``sampling_percentage`` then being a
+    fraction of those.
     """
     sitk = _sitk()
     size = np.asarray(fixed_image.GetSize(), dtype=float)
-    extent = (size - 1.0) * np.asarray(fixed_image.GetSpacing())
-    mesh = [max(1, int(round(e / settings.control_point_spacing))) for e in extent]
-    transform = sitk.BSplineTransformInitializer(fixed_image, mesh, 3)
+    transform = identity_bspline(fixed_image, settings.control_point_spacing)
     if initial is not None:
         transform.SetParameters(initial.GetParameters())
     method = sitk.ImageRegistrationMethod()
@@ -99,13 +123,14 @@ def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial
         method.SetMetricSamplingStrategy(method.NONE)
     else:
         method.SetMetricSamplingStrategy(method.RANDOM)
-        # SimpleITK reads a seed of 0 as "seed from the wall clock": shift by one
         fraction = float(settings.sampling_percentage)
         if mask is not None:  # ITK draws from every voxel, then drops those outside
-            fraction = min(1.0, fraction * mask.size / max(1, int(mask.sum())))
+            inside = float(sitk.GetArrayViewFromImage(mask).mean())
+            fraction = min(1.0, fraction / inside)
+        # SimpleITK reads a seed of 0 as "seed from the wall clock": shift by one
         method.SetMetricSamplingPercentage(fraction, int(settings.seed) + 1)
     if mask is not None:
-        method.SetMetricFixedMask(_mask_image(mask, fixed_image))
+        method.SetMetricFixedMask(mask)
     method.SetInterpolator(sitk.sitkLinear)
     if settings.optimizer == "lbfgsb":
         method.SetOptimizerAsLBFGSB(
@@ -173,8 +198,10 @@ def register_frames(
     m = _check_volume(moving, "moving")
     if f.shape != m.shape:
         raise ValueError(f"moving: shape {m.shape} differs from fixed's {f.shape}")
-    mask = None if mask is None else _check_mask(mask, f.shape, "fixed")
-    return _register(image_from_array(f, a), image_from_array(m, a), settings, mask=mask)
+    fixed_image = image_from_array(f, a)
+    if mask is not None:
+        mask = _mask_image(_check_mask(mask, f.shape, "fixed"), fixed_image)
+    return _register(fixed_image, image_from_array(m, a), settings, mask=mask)
 
 
 def _check_settings(settings) -> CineTrackingSettings:
@@ -246,29 +273,29 @@ def _forward_weights(n: int, es_frame: int | None) -> np.ndarray:
     return np.where(t <= es_frame, 1.0 - 0.5 * t / es_frame, 0.5 * (n - t) / (n - es_frame))
 
 
-def _register_pair(fixed, moving, affine, settings, mask=None):
-    fixed_image = image_from_array(fixed, affine)
-    return _register(fixed_image, image_from_array(moving, affine), settings, mask=mask)
+def _register_pair(fixed, moving, affine, settings):
+    return _register(image_from_array(fixed, affine), image_from_array(moving, affine), settings)
 
 
-def _registrations(series, affine, pairs, settings: CineTrackingSettings, mask=None) -> list:
+def _registrations(series, affine, pairs, settings: CineTrackingSettings) -> list:
     """The transforms of the frame pairs ``(fixed, moving)``, ``settings.jobs`` at a time."""
     if settings.jobs == 1 or len(pairs) < 2:
         images = [image_from_array(frame, affine) for frame in series]
-        return [_register(images[i], images[j], settings, mask=mask) for i, j in pairs]
+        return [_register(images[i], images[j], settings) for i, j in pairs]
     from joblib import Parallel, delayed
 
     return Parallel(n_jobs=min(settings.jobs, len(pairs)))(
-        delayed(_register_pair)(series[i], series[j], affine, settings, mask) for i, j in pairs
+        delayed(_register_pair)(series[i], series[j], affine, settings) for i, j in pairs
     )
 
 
 def _ed_chain(frames, affine, settings: CineTrackingSettings, mask=None) -> list:
     """Transforms from ``frames[0]`` (ED) to each later frame, each started from the last."""
     ed = image_from_array(frames[0], affine)
+    mask_image = None if mask is None else _mask_image(mask, ed)  # one for the whole chain
     out, previous = [], None
     for frame in frames[1:]:
-        previous = _register(ed, image_from_array(frame, affine), settings, previous, mask)
+        previous = _register(ed, image_from_array(frame, affine), settings, previous, mask_image)
         out.append(previous)
     return out
 
