@@ -10,6 +10,8 @@ errors measured with these settings and well below the motion itself.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -122,13 +124,33 @@ def test_the_combined_tracking_follows_the_tagged_motion(case, combined):
     assert total < 0.4 * motion, (total, motion)
 
 
-def test_the_twist_is_recovered(case, combined):
-    true_twist = _twist(case["params"], case["ed"], case["truth"])
-    tracked = _twist(case["params"], case["ed"], combined[ES_FRAME])
-    print(f"twist: tracked {tracked:.2f} true {true_twist:.2f}")
-    # measured: tracked 8.1 degrees, true 7.9 degrees
+def test_the_twist_is_recovered_from_a_tagged_short_axis_stack():
+    """The twist target (within 2 degrees) on the benchmark's grid: a short-axis stack of
+    1.5 x 1.5 x 8 mm, tagged, systole in four steps, every frame registered to ED (the
+    default scheme) with the benchmark's settings. Measured: tracked 8.3 degrees, true
+    7.9; with ITK's Gaussian image gradient (sigma 8 mm) the twist is lost
+    (docs/tracking_cine.md)."""
+    cohort = make_synthetic_cohort(1, n_vertices=241)
+    params, ed = cohort.subjects[0].parameters, cohort.subjects[0].ed
+    affine = np.diag([1.5, 1.5, 8.0, 1.0])
+    affine[:3, 3] = [-50.0, -50.0, -16.0]
+    shape = (68, 68, 15)
+    fractions = cycle_fraction(np.arange(5) / 12, 4 / 12)  # ED to ES (f = 1) in 4 steps
+    rng = np.random.default_rng(100)
+    series = np.stack([render_cine(params, affine, shape, f, rng, noise=0.02,
+                                   tagging=TagGrid(), supersample=2) for f in fractions])  # fmt: skip
+    settings = replace(SETTINGS, iterations=20, combine="forward")
+    tracked = track_cine(series, affine, ed, settings)[-1]
+    truth = motion_forward(params, ed, 1.0)
+    true_twist, got = _twist(params, ed, truth), _twist(params, ed, tracked)
+    normal, tangential = _split(tracked - truth, outward_vertex_normals(truth, cohort.faces))
+    print(
+        f"twist: tracked {got:.2f} true {true_twist:.2f}; normal {normal:.2f} "
+        f"tangential {tangential:.2f}"
+    )
     assert abs(true_twist) > 5.0  # the subject twists: apex one way, base the other
-    assert abs(tracked - true_twist) < 0.25 * abs(true_twist), (tracked, true_twist)
+    assert abs(got - true_twist) < 2.0, (got, true_twist)
+    assert normal < 0.6, normal
 
 
 def test_forward_only_works_and_tagging_helps_tangentially(case, systole):
@@ -217,7 +239,6 @@ def test_two_frames_track_and_the_tracking_is_deterministic():
 def test_a_frame_equal_to_ed_returns_to_ed_from_a_displaced_start():
     """One forward chain to ED through a shifted frame: the last frame, a copy of ED, is
     registered to ED starting from the shift, and must come back (no drift carried)."""
-    from dataclasses import replace
 
     fixed, moving, affine = _blobs(SHIFT)
     points = np.random.default_rng(8).uniform(-6.0, 6.0, size=(10, 3))
@@ -253,7 +274,6 @@ def test_the_metric_samples_only_the_mask():
     """Blobs that move, all on one side; points on the featureless side. Sampling the
     whole image drags the points partly along (the B-spline spreads the motion); a mask
     around the points holds no signal, so nothing moves them."""
-    from dataclasses import replace
 
     voxel, shape = 2.0, (41, 21, 21)
     affine = np.diag([voxel, voxel, voxel, 1.0])
@@ -284,7 +304,6 @@ def test_the_metric_samples_only_the_mask():
 def test_registrations_in_parallel_give_the_same_tracking(reference):
     """``jobs`` runs the independent registrations of a series at a time: the same result
     (bit for bit, one thread each), and the same stored-result key."""
-    from dataclasses import replace
 
     fixed, moving, affine = _blobs(SHIFT)
     points = np.random.default_rng(7).uniform(-6.0, 6.0, size=(10, 3))
@@ -346,6 +365,54 @@ def test_bad_input_names_the_argument(change, name):
         track_cine(**args)
 
 
+def _tagged_stack(angle_deg, voxel, shape, spacing=7.0):
+    """A ring of wall with tagging lines ``spacing`` mm apart, rotated by ``angle_deg``
+    about the z-axis (the material at ``X`` shown at ``R X``); and the affine."""
+    affine = np.diag([*voxel, 1.0])
+    affine[:3, 3] = -np.asarray(voxel) * (np.asarray(shape) - 1) / 2
+    index = np.stack(np.meshgrid(*map(np.arange, shape), indexing="ij"), -1)
+    x = index * np.asarray(voxel) + affine[:3, 3]
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    X, Y = c * x[..., 0] + s * x[..., 1], -s * x[..., 0] + c * x[..., 1]  # pulled back
+    r = np.hypot(X, Y)
+    wall = 1 / (1 + np.exp(-(r - 12.0) / 0.7)) - 1 / (1 + np.exp(-(r - 24.0) / 0.7))
+    d = [((u / spacing + 0.5) % 1 - 0.5) * spacing for u in (X, Y)]  # to the nearest line
+    tags = [1 - 0.8 * np.exp(-0.5 * (e / 0.64) ** 2) for e in d]  # 1.5 mm wide lines
+    return 0.2 + 0.6 * wall * tags[0] * tags[1], affine
+
+
+@pytest.mark.parametrize(
+    "voxel, shape, gradient, recovered",
+    [
+        ((1.5, 1.5, 8.0), (48, 48, 8), "central_difference", True),
+        ((1.5, 1.5, 8.0), (48, 48, 8), "gaussian", False),
+        ((1.5, 1.5, 1.5), (48, 48, 12), "gaussian", True),
+    ],
+)
+def test_a_rotation_of_tags_is_recovered_unless_the_gradient_is_smoothed_by_the_slices(
+    voxel, shape, gradient, recovered
+):
+    """The cause of the unrecovered twist on short-axis stacks, isolated: a rigid 4 degree
+    rotation of a tagged ring. ITK's default image gradient (``"gaussian"``) smooths with
+    a sigma of the largest voxel spacing: with 8 mm slices it wipes out the 7 mm tags
+    in-plane and the B-spline stays put (measured: 0.0 degrees); on a 1.5 mm grid the same
+    gradient follows the tags, and central differences do on the 8 mm stack (measured:
+    4.3 and 4.2 degrees)."""
+    settings = CineTrackingSettings(**{**BLOB_SETTINGS.__dict__, "image_gradient": gradient})
+    fixed, affine = _tagged_stack(0.0, voxel, shape)
+    moving, _ = _tagged_stack(4.0, voxel, shape)
+    transform = register_frames(fixed, moving, affine, settings)
+    theta = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    ring = np.stack([18 * np.cos(theta), 18 * np.sin(theta), np.zeros_like(theta)], 1)
+    moved = np.array([transform.TransformPoint(tuple(p)) for p in ring])
+    rotation = _rotation_deg(ring, moved)
+    print(voxel, gradient, f"rotation {rotation:.2f} of 4 degrees")
+    if recovered:
+        assert abs(rotation - 4.0) < 0.6, rotation
+    else:
+        assert abs(rotation) < 1.0, rotation
+
+
 @pytest.mark.parametrize(
     "field, value",
     [
@@ -354,6 +421,7 @@ def test_bad_input_names_the_argument(change, name):
         ("optimizer", "adam"),
         ("combine", "backward"),
         ("reference", "previous"),
+        ("image_gradient", "sobel"),
         ("mask_distance", 0.0),
         ("mask_distance", float("nan")),
         ("iterations", 0),
@@ -394,4 +462,13 @@ def test_symladders_track_cine_moves_each_subject_as_track_cine_does(tmp_path, c
     for t in range(2):
         got, _ = read_mesh(out / "case" / f"frame_{t:02d}.vtk")
         np.testing.assert_allclose(got, expected[t], atol=1e-3)
+    # --image-gradient reaches the registrations (ITK's Gaussian derivative)
+    smoothed = tmp_path / "smoothed"
+    argv_smoothed = [*argv[: argv.index("-o")], "-o", str(smoothed), *argv[argv.index("-o") + 2 :]]
+    assert main([*argv_smoothed, "--image-gradient", "gaussian"]) == 1
+    capsys.readouterr()
+    expected = track_cine(stored, case["affine"], case["ed"],
+                          replace(SETTINGS, image_gradient="gaussian"))  # fmt: skip
+    got, _ = read_mesh(smoothed / "case" / "frame_01.vtk")
+    np.testing.assert_allclose(got, expected[1], atol=1e-3)
     assert main([*argv[:3], "-o", str(out)]) == 2  # label series need --label

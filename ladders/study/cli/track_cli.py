@@ -100,6 +100,11 @@ def add_track_parser(sub) -> None:
     p.add_argument("--mask-distance", type=nonnegative_float, default=10.0, metavar="MM",
                    help="with --cine and --reference ed: the metric samples the voxels within MM "
                         "of an ED vertex (0: the whole image)")  # fmt: skip
+    p.add_argument("--image-gradient", choices=("central_difference", "gaussian"),
+                   default="central_difference",
+                   help="with --cine: the moving image's gradient in the metric's derivative: "
+                        "central differences (default) or ITK's Gaussian derivative, whose sigma "
+                        "is the largest voxel spacing (the slice thickness of a short-axis stack)")  # fmt: skip
     p.add_argument("--registration-jobs", type=jobs_count, default=1, metavar="N",
                    help="with --cine: registrations of a subject run N at a time (processes; the "
                         "same result whatever N; with --reference ed, the two halves of the "
@@ -150,6 +155,7 @@ def run_track_command(args) -> int:
                 iterations=max(1, args.iterations),
                 reference=args.reference,
                 mask_distance=args.mask_distance or None,
+                image_gradient=args.image_gradient,
                 jobs=(os.cpu_count() or 1)
                 if args.registration_jobs == -1
                 else args.registration_jobs,

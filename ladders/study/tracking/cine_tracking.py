@@ -119,6 +119,9 @@ def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial
         method.SetMetricAsMeanSquares()
     else:
         method.SetMetricAsMattesMutualInformation(numberOfHistogramBins=settings.histogram_bins)
+    if settings.image_gradient == "central_difference":  # not ITK's smoothed default
+        method.MetricUseMovingImageGradientFilterOff()
+        method.MetricUseFixedImageGradientFilterOff()
     if settings.sampling_percentage is None:
         method.SetMetricSamplingStrategy(method.NONE)
     else:
