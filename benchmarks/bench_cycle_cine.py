@@ -213,7 +213,8 @@ def main(argv=None) -> None:
                    repetitions)  # fmt: skip
     print("\n" + table)
     if args.publish:
-        command = "python benchmarks/bench_cycle_cine.py --no-run --cohorts "
+        # the stages resume: a run with --no-run publishes what the full command computes
+        command = "python benchmarks/bench_cycle_cine.py --cohorts "
         command += " ".join(args.cohorts) + " --images " + " ".join(args.images) + " --publish"
         publish("cycle_cine", table, command)
 
