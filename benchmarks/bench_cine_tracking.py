@@ -39,6 +39,7 @@ from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_f
 from ladders.study.imaging import TagGrid, render_cine  # noqa: E402
 from ladders.study.tracking.cine_tracking import CineTrackingSettings, track_cine  # noqa: E402
 from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
+from ladders.study.wall_rotation import twist_angle  # noqa: E402
 
 GRIDS = {"short-axis 1.5 x 1.5 x 8 mm": (1.5, 1.5, 8.0), "isotropic 1.5 mm": (1.5, 1.5, 1.5)}
 SETTINGS = CineTrackingSettings(control_point_spacing=20.0, sampling_percentage=0.05, iterations=20)
@@ -53,15 +54,10 @@ def grid(voxel):
     return affine, shape
 
 
-def rotation_deg(before, after):
-    a = np.arctan2(after[:, 1], after[:, 0]) - np.arctan2(before[:, 1], before[:, 0])
-    return np.degrees(np.mean((a + np.pi) % (2 * np.pi) - np.pi))
-
-
 def twist(params, ed, es):
-    z, rho = ed[:, 2] / params.long_axis, np.hypot(ed[:, 0], ed[:, 1])
-    apex, base = (z < 0.3) & (rho > 5.0), z > 0.7
-    return rotation_deg(ed[apex], es[apex]) - rotation_deg(ed[base], es[base])
+    """Apical minus basal rotation (degrees, counter-clockwise seen from the apex) of a
+    subject in its own frame (apex at the origin, base-plane centre at ``z = c``)."""
+    return twist_angle(ed, es, np.zeros(3), np.array([0.0, 0.0, params.long_axis]))
 
 
 def split_error(moved, truth, faces) -> tuple[float, float]:

@@ -26,6 +26,7 @@ from ladders.study.tracking.cine_tracking import (  # noqa: E402
     wall_mask,
 )
 from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
+from ladders.study.wall_rotation import rotation_about_axis, twist_angle  # noqa: E402
 
 N_FRAMES, ES_PHASE, ES_FRAME = 4, 0.5, 2
 VOXEL = 2.5
@@ -61,17 +62,9 @@ def _split(error, normals):
     return normal.mean(), tangential.mean()
 
 
-def _rotation_deg(before, after):
-    """Mean rotation about the long axis (+z) of the points, degrees."""
-    a = np.arctan2(after[:, 1], after[:, 0]) - np.arctan2(before[:, 1], before[:, 0])
-    return np.degrees(np.mean((a + np.pi) % (2 * np.pi) - np.pi))
-
-
 def _twist(params, ed, es):
     """Apex rotation minus base rotation (degrees), from the vertices off the axis."""
-    z, rho = ed[:, 2] / params.long_axis, np.hypot(ed[:, 0], ed[:, 1])
-    apex, base = (z < 0.3) & (rho > 5.0), z > 0.7
-    return _rotation_deg(ed[apex], es[apex]) - _rotation_deg(ed[base], es[base])
+    return twist_angle(ed, es, np.zeros(3), np.array([0.0, 0.0, params.long_axis]))
 
 
 @pytest.fixture(scope="module")
@@ -405,7 +398,7 @@ def test_a_rotation_of_tags_is_recovered_unless_the_gradient_is_smoothed_by_the_
     theta = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
     ring = np.stack([18 * np.cos(theta), 18 * np.sin(theta), np.zeros_like(theta)], 1)
     moved = np.array([transform.TransformPoint(tuple(p)) for p in ring])
-    rotation = _rotation_deg(ring, moved)
+    rotation = np.mean(rotation_about_axis(ring, moved, [0, 0, 0], [0, 0, -1], 0.0))  # about +z
     print(voxel, gradient, f"rotation {rotation:.2f} of 4 degrees")
     if recovered:
         assert abs(rotation - 4.0) < 0.6, rotation

@@ -11,6 +11,7 @@ import pytest
 
 from ladders.study.cli import main
 from ladders.study.cohort import Subject
+from ladders.study.cohort.planted_effect import MotionAbnormality
 from ladders.study.errors import CohortError
 from ladders.study.meshes.mesh_io import write_mesh
 from ladders.study.population.aha_model import aha_segments
@@ -207,6 +208,63 @@ def test_leaving_a_noisy_apical_cap_out_keeps_the_power_of_the_rest():
         compare_cycles(motion, c.patients, 10, np.random.default_rng(0), vertices=~cap[:10])
 
 
+def test_the_rotation_finds_a_planted_twist_that_the_normal_motion_does_not_see():
+    """A twist (5 degrees about the long axis in segments 7, 8, 13, 14) through the true
+    frames: the rotation's peak finds the region, the normal motion's does not, and
+    random splits of the controls find something at about the nominal rate. The atlas's apex and its vertices near the axis
+    are left out. On a rigid turn of every frame, the rotation is the turn's angle."""
+    twist = MotionAbnormality("twist", transition_height=0.1)
+    c = make_two_group_cycles(n_subjects=24, n_frames=12, n_vertices=300, seed=4,
+                              abnormality=twist)  # fmt: skip
+    motion = _corresponded_motion(c)
+    lm = synthetic_landmarks(c.data.cohort.atlas)
+    region = c.data.region.affected
+    tests = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0),
+                           measure="rotation", axis=lm)  # fmt: skip
+    near = np.linalg.norm(np.cross(motion.atlas - lm.apex, lm.long_axis), axis=1) < 5.0
+    assert near.any() and (tests.tested == ~near).all()
+    assert np.isnan(tests.peak.p_fwer[near]).all() and np.isnan(tests.peaks[:, near]).all()
+    found = tests.peak.p_fwer < 0.05
+    print(f"twist: rotation finds {found[region].mean():.2f} of the region, "
+          f"{(found & ~region).sum()} vertices outside")  # fmt: skip
+    assert found[region].mean() >= 0.8
+    assert (found & ~region).sum() <= 0.02 * len(region)
+    sign = np.sign(tests.peaks[:, found].mean(axis=0))  # the peak in the cohort's sense
+    assert (np.sign(tests.peaks[:, found]) == sign).mean() > 0.9
+    normal = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0))
+    assert (normal.peak.p_fwer < 0.05)[region].mean() <= 0.1
+    controls = np.flatnonzero(~c.patients)
+    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
+                       motion.atlas, motion.faces)  # fmt: skip
+    rng, hits = np.random.default_rng(5), 0
+    for _ in range(40):  # the null FWER over random splits of the controls
+        split = np.isin(np.arange(len(controls)), rng.permutation(len(controls))[:6])
+        null_tests = compare_cycles(null, split, 200, rng, measure="rotation",
+                                    axis=np.stack([lm.apex, lm.base]))  # fmt: skip
+        hits += bool((null_tests.peak.p_fwer < 0.05).any())
+    assert hits / 40 <= 0.15  # nominal 0.05; 7 or more of 40 has probability 0.014
+    turns = np.linspace(0.0, 12.0, 12)
+    rigid = np.stack([_rotated(motion.atlas, lm, a) - motion.atlas for a in turns])
+    curve = CycleMotion(("a",), rigid[None], motion.atlas, motion.faces).rotation(lm.apex, lm.base)
+    np.testing.assert_allclose(curve[0][:, ~near], np.repeat(turns[:, None], (~near).sum(), 1),
+                               atol=1e-9)  # fmt: skip
+    with pytest.raises(ValueError, match="axis: the rotation needs"):
+        compare_cycles(motion, c.patients, 10, np.random.default_rng(0), measure="rotation")
+    with pytest.raises(ValueError, match="measure: expected one of"):
+        compare_cycles(motion, c.patients, 10, np.random.default_rng(0), measure="twist")
+    with pytest.raises(ValueError, match="min_radius: fewer than 2 vertices"):
+        compare_cycles(motion, c.patients, 10, np.random.default_rng(0), measure="rotation",
+                       axis=lm, min_radius=1e4)  # fmt: skip
+
+
+def _rotated(points, lm, degrees):
+    """``points`` turned counter-clockwise, seen from the apex, about the landmarks' axis."""
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.from_rotvec(-np.radians(degrees) * lm.long_axis)  # long_axis: apex to base
+    return turn.apply(points - lm.apex) + lm.apex
+
+
 def test_groups_must_name_every_subject(cycles):
     motion = _corresponded_motion(cycles)
     with pytest.raises(CohortError, match="no group for subject"):
@@ -262,6 +320,22 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
     rows = list(csv.DictReader(open(tmp_path / "no17" / "cycle_vertices.csv")))
     assert [r["tested"] == "1" for r in rows] == list(~cap)
     assert all(r["peak_p_fwer"] == "nan" for r, c in zip(rows, cap) if c)
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--permutations", "200", "--measure", "rotation", "--aha",
+                 str(tmp_path / "aha.json"), "-o", str(tmp_path / "rotation")]) == 0  # fmt: skip
+    near = np.linalg.norm(np.cross(atlas - lm.apex, lm.long_axis), axis=1) < 5.0
+    assert "peak rotation " in capsys.readouterr().out
+    rows = list(csv.DictReader(open(tmp_path / "rotation" / "cycle_vertices.csv")))
+    assert [r["tested"] == "1" for r in rows] == list(~near)
+    assert all(np.isfinite(float(r["peak_group1_deg"])) != c for r, c in zip(rows, near))
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--measure", "rotation"]) == 2  # fmt: skip
+    assert "--measure rotation: needs --aha" in capsys.readouterr().err
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--aha", str(tmp_path / "aha.json")]) == 2  # fmt: skip
+    assert "--aha: only used with --exclude-segments or --measure rotation" in (
+        capsys.readouterr().err
+    )
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
                  "--exclude-segments", "17"]) == 2  # fmt: skip
     assert "--exclude-segments: needs --aha" in capsys.readouterr().err

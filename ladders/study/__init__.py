@@ -18,7 +18,9 @@ Sub-packages, by concern:
 - :mod:`.cli`: the ``symladders`` command line.
 
 Beside them: local area strain (:func:`area_strain`, :func:`area_strain_error`),
-enclosed volumes (:mod:`.volume`), the analytic validation run (:func:`run_validation`),
+the normal wall motion (:func:`normal_wall_motion`), the rotation about the long axis
+and the twist (:func:`rotation_about_axis`, :func:`twist_angle`), enclosed volumes
+(:mod:`.volume`), the analytic validation run (:func:`run_validation`),
 :func:`run`, the study in one call (:mod:`.study_run`), and :mod:`.population`, the
 group statistics of transported motion.
 """
@@ -72,6 +74,8 @@ from .running import (
     run_study,
     run_subject,
 )
+from .wall_motion import normal_wall_motion
+from .wall_rotation import rotation_about_axis, twist_angle
 
 __all__ = [
     "Cohort",
@@ -100,6 +104,9 @@ __all__ = [
     "area_strain",
     "area_strain_error",
     "cell_areas",
+    "normal_wall_motion",
+    "rotation_about_axis",
+    "twist_angle",
     "bent_ellipsoid",
     "ERROR_NAMES",
     "VARIANTS",

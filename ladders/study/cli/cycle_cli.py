@@ -61,8 +61,9 @@ def add_cycle_parsers(sub) -> None:
         help="compare two groups' cycles: per frame, peak and time to peak of the normal motion",
         description=(
             "Test two groups' transported cycles (STUDY, the output of 'symladders "
-            "cycle-study') on the normal motion at every vertex: per frame (FWER over the "
-            "vertices and frames together), and on each vertex's peak inward motion and its "
+            "cycle-study') on the normal motion (or, with --measure rotation, the rotation "
+            "about the long axis) at every vertex: per frame (FWER over the "
+            "vertices and frames together), and on each vertex's peak and its "
             "time in the cycle (FWER over the vertices), by permutation. OUTPUT holds "
             "cycle_vertices.csv, cycle_frames.csv, cycle_tests.vtu and cycle_curves.png."
         ),
@@ -78,10 +79,17 @@ def add_cycle_parsers(sub) -> None:
     q.add_argument("--tfce", action="store_true",
                    help="also test the peak with threshold-free cluster enhancement on the "
                         "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
+    q.add_argument("--measure", choices=("normal", "rotation"), default="normal",
+                   help="the curve tested per vertex: the normal motion (mm), or the rotation "
+                        "about the long axis (degrees, counter-clockwise seen from the apex; "
+                        "what a twist changes; needs --aha)")  # fmt: skip
+    q.add_argument("--min-radius", type=positive_float, default=5.0,
+                   help="with --measure rotation: vertices closer to the long axis than this "
+                        "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
     q.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
                    help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
                         "landmark table's row 'atlas'): places the AHA segments for "
-                        "--exclude-segments")  # fmt: skip
+                        "--exclude-segments and the long axis for --measure rotation")  # fmt: skip
     q.add_argument("--exclude-segments", type=int, nargs="+", default=None, metavar="SEGMENT",
                    help="AHA segments (1-17) left out of the tests, e.g. 17, the apical cap "
                         "thick short-axis slices resolve poorly; needs --aha")  # fmt: skip
@@ -131,25 +139,38 @@ def _two_groups(table: dict, compare, subjects) -> tuple[dict, tuple[str, str]]:
     return {s: g == names[0] for s, g in present.items() if g in names}, tuple(names)
 
 
-def _tested_segments(args, motion):
+def _landmarks(args):
+    """The atlas's landmarks of ``--aha`` (None without it); checks what needs them."""
+    from ..population import read_aha_landmarks
+
+    if args.aha is None:
+        if args.measure == "rotation":
+            raise UsageError("symladders cycle-analyze: error: --measure rotation: needs --aha "
+                             "(the atlas's apex and base-plane centre place the long axis)")  # fmt: skip
+        return None
+    if args.exclude_segments is None and args.measure != "rotation":
+        raise UsageError("symladders cycle-analyze: error: --aha: only used with "
+                         "--exclude-segments or --measure rotation")  # fmt: skip
+    try:
+        return read_aha_landmarks(args.aha)
+    except ValueError as exc:
+        raise UsageError(f"symladders cycle-analyze: error: --aha: {exc}") from None
+
+
+def _tested_segments(args, motion, lm):
     """The vertices tested: all, or those outside ``--exclude-segments`` (None: all)."""
     if args.exclude_segments is None:
-        if args.aha is not None:
-            raise UsageError("symladders cycle-analyze: error: --aha: only used with "
-                             "--exclude-segments")  # fmt: skip
         return None
     import numpy as np
 
     from ..cohort.aha_segments import check_segments
-    from ..population import read_aha_landmarks
     from ..population.aha_model import aha_segments
 
-    if args.aha is None:
+    if lm is None:
         raise UsageError("symladders cycle-analyze: error: --exclude-segments: needs --aha "
                          "(the atlas's landmarks that place the segments)")  # fmt: skip
     try:
         excluded = check_segments(args.exclude_segments, "--exclude-segments")
-        lm = read_aha_landmarks(args.aha)
         labels = aha_segments(motion.atlas, lm.apex, lm.base, lm.septum, motion.faces)
     except ValueError as exc:
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
@@ -173,11 +194,13 @@ def run_cycle_analyze_command(args) -> int:
         keep = [i for i, s in enumerate(motion.subjects) if s in labels]
         motion = type(motion)(tuple(motion.subjects[i] for i in keep),
                               motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
-    tested = _tested_segments(args, motion)
+    axis = _landmarks(args)
+    tested = _tested_segments(args, motion, axis)
     try:
         tests = compare_cycles(motion, labels, args.permutations,
                                np.random.default_rng(args.seed), tfce=args.tfce,
-                               vertices=tested)  # fmt: skip
+                               vertices=tested, measure=args.measure, axis=axis,
+                               min_radius=args.min_radius)  # fmt: skip
     except ValueError as exc:  # e.g. a group of fewer than 3 subjects
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
     output = Path(args.output) if args.output else Path(args.study) / "analysis"
@@ -187,11 +210,11 @@ def run_cycle_analyze_command(args) -> int:
     print(
         f"symladders cycle-analyze: {names[0]} ({int(tests.labels.sum())}) against {names[1]} "
         f"({int((~tests.labels).sum())}), {args.permutations:,} permutations: vertices found at "
-        f"FWER 5 %: peak {found[0]}"
+        f"FWER 5 %: peak {'rotation ' if tests.measure == 'rotation' else ''}{found[0]}"
         + ("" if tests.peak_tfce is None
            else f" (TFCE: {int((tests.peak_tfce.p_fwer_enhanced < 0.05).sum())})")
         + f", time to peak {found[1]}, some frame {frames}"
-        + ("" if tested is None else f" (of {int(tested.sum())} vertices tested)")
+        + ("" if tests.tested.all() else f" (of {int(tests.tested.sum())} vertices tested)")
         + f"; in {output}"
     )  # fmt: skip
     return 0

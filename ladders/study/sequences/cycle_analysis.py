@@ -12,6 +12,16 @@ error by the maximum statistic):
 * the time to that peak, as a fraction of the cycle, refined between frames by the
   parabola through the peak frame and its two neighbours, FWER over the vertices.
 
+With ``measure="rotation"`` the curve of a vertex is instead its rotation about the
+long axis, ``r_t`` (degrees, positive counter-clockwise seen from the apex,
+:func:`~ladders.study.wall_rotation.rotation_about_axis`, the axis through the
+atlas's apex and base-plane centre), the motion a twist changes and the normal motion
+does not show. A vertex's peak is taken in the sense its cohort turns: with ``m_t``
+the mean curve over every subject (both groups, so the choice does not depend on the
+labels and the permutations stay exact), ``s = sign(m_t*)`` at the frame of largest
+``|m_t|``, and the peak is ``s max_t (s r_t)`` (signed degrees) with its time. Vertices
+closer to the axis than ``min_radius`` (the apical cap) are not tested.
+
 With ``vertices`` only part of the atlas is tested (e.g. without the apical cap, AHA
 segment 17, which thick short-axis slices resolve poorly): the FWER is over those
 vertices, and the others have ``NaN`` statistics and p-values.
@@ -38,8 +48,12 @@ from ...statistics.tfce import mesh_adjacency
 from ..errors import CohortError
 from ..meshes.mesh_io import read_mesh
 from ..wall_motion import outward_vertex_normals
+from ..wall_rotation import rotation_about_axis
 
 __all__ = ["CycleMotion", "CycleTests", "compare_cycles", "curve_peaks", "load_cycle_motion"]
+
+#: What a cycle test measures at each vertex and frame, and its unit.
+MEASURES = {"normal": "mm", "rotation": "deg"}
 
 
 @dataclass(frozen=True)
@@ -70,6 +84,33 @@ class CycleMotion:
         """``n_t`` on the atlas's outward normals, shape ``(n_subjects, n_frames, k)``."""
         nu = outward_vertex_normals(self.atlas, self.faces)
         return np.einsum("stkd,kd->stk", self.displacement, nu)
+
+    def rotation(self, apex, base, min_radius: float = 5.0) -> np.ndarray:
+        """``r_t``: every vertex's rotation about the long axis, degrees, shape
+        ``(n_subjects, n_frames, k)``; ``NaN`` at vertices closer to the axis than
+        ``min_radius`` (see :func:`~ladders.study.wall_rotation.rotation_about_axis`).
+
+        Parameters
+        ----------
+        apex, base : array, shape (3,)
+            The atlas's apex and base-plane centre.
+        min_radius : float, default 5.0
+        """
+        return rotation_about_axis(self.atlas, self.atlas + self.displacement, apex, base,
+                                   min_radius)  # fmt: skip
+
+    def curves(self, measure: str = "normal", axis=None, min_radius: float = 5.0) -> np.ndarray:
+        """The curve tested per vertex: :meth:`normal` or :meth:`rotation` about ``axis``
+        (the apex and base-plane centre, shape ``(2, 3)``, or landmarks with ``apex``
+        and ``base``); shape ``(n_subjects, n_frames, k)``."""
+        if measure not in MEASURES:
+            raise ValueError(f"measure: expected one of {sorted(MEASURES)}, got {measure!r}")
+        if measure == "normal":
+            return self.normal()
+        if axis is None:
+            raise ValueError("axis: the rotation needs the atlas's apex and base-plane centre")
+        apex, base = (axis.apex, axis.base) if hasattr(axis, "apex") else axis
+        return self.rotation(apex, base, min_radius)
 
 
 def load_cycle_motion(folder) -> CycleMotion:
@@ -163,6 +204,12 @@ class CycleTests:
         threshold-free cluster enhancement, ``p_fwer_enhanced`` per vertex.
     tested : ndarray of bool, shape (k,), or None
         The vertices tested (the others have ``NaN`` maps); None: all.
+    measure : str
+        ``"normal"`` (peaks in mm, inward positive) or ``"rotation"`` (signed degrees).
+    axis : ndarray, shape (2, 3), or None
+        The apex and base-plane centre of the rotation; None for the normal motion.
+    min_radius : float
+        The rotation's distance to the axis below which vertices are not tested.
     """
 
     per_frame: VertexwiseTest
@@ -173,6 +220,18 @@ class CycleTests:
     labels: np.ndarray
     peak_tfce: GLMTest | None = None
     tested: np.ndarray | None = None
+    measure: str = "normal"
+    axis: np.ndarray | None = None
+    min_radius: float = 5.0
+
+    @property
+    def unit(self) -> str:
+        """The peaks' unit: ``"mm"`` or ``"deg"``."""
+        return MEASURES[self.measure]
+
+    def curves(self, motion: CycleMotion) -> np.ndarray:
+        """The curves these tests were computed on, ``(n_subjects, n_frames, k)``."""
+        return motion.curves(self.measure, self.axis, self.min_radius)
 
 
 #: The per-vertex maps of a VertexwiseTest, and those a GLMTest adds.
@@ -219,6 +278,17 @@ def _reshaped(test: VertexwiseTest, shape) -> VertexwiseTest:
                           test.kind, test.dim, test.group_sizes)  # fmt: skip
 
 
+def _signed_peaks(curves: np.ndarray, measure: str) -> tuple[np.ndarray, np.ndarray]:
+    """Peaks and times: of the inward motion, or of the rotation in the cohort's sense."""
+    if measure == "normal":
+        return curve_peaks(curves)
+    mean = curves.mean(axis=0)  # (n_frames, k), over both groups
+    at = np.argmax(np.abs(mean), axis=0)
+    sense = np.where(mean[at, np.arange(mean.shape[1])] < 0, -1.0, 1.0)
+    peak, time = curve_peaks(-sense * curves)
+    return sense * peak, time
+
+
 def compare_cycles(
     motion: CycleMotion,
     groups,
@@ -226,6 +296,9 @@ def compare_cycles(
     rng: np.random.Generator | None = None,
     tfce: bool = False,
     vertices=None,
+    measure: str = "normal",
+    axis=None,
+    min_radius: float = 5.0,
 ) -> CycleTests:
     """Test two groups' cycles per frame and on the peak and time to peak (see the module).
 
@@ -242,6 +315,13 @@ def compare_cycles(
     vertices : array of bool, shape (k,), optional
         The atlas's vertices tested (default all); TFCE runs on the triangles between
         them.
+    measure : {"normal", "rotation"}, default "normal"
+        The normal motion (mm) or the rotation about the long axis (degrees).
+    axis : array (2, 3) or Landmarks, optional
+        The atlas's apex and base-plane centre (rows), or its landmarks: required for
+        the rotation.
+    min_radius : float, default 5.0
+        For the rotation: vertices closer to the axis than this (mm) are not tested.
 
     Returns
     -------
@@ -255,11 +335,22 @@ def compare_cycles(
     labels = np.asarray(groups, dtype=bool)
     if labels.shape != (len(motion.subjects),):
         raise ValueError(f"groups: expected {len(motion.subjects)} labels, got {labels.shape}")
-    curves = motion.normal()
+    curves = motion.curves(measure, axis, min_radius)
     n, n_frames, k = curves.shape
     tested = _tested(vertices, k)
+    finite = np.isfinite(curves).all(axis=(0, 1))  # the rotation's vertices off the axis
+    if measure == "rotation":
+        tested = tested & finite
+        if tested.sum() < 2:
+            raise ValueError(f"min_radius: fewer than 2 vertices tested are {min_radius} mm "
+                             "or more from the long axis")  # fmt: skip
+        axis = np.stack([axis.apex, axis.base]) if hasattr(axis, "apex") else axis
+        axis = np.asarray(axis, dtype=np.float64)
+    else:
+        axis = None
     m = int(tested.sum())
-    peaks, times = curve_peaks(curves)
+    peaks, times = np.full((n, k), np.nan), np.full((n, k), np.nan)
+    peaks[:, finite], times[:, finite] = _signed_peaks(curves[..., finite], measure)
     per_frame = vertexwise_test(curves[..., tested].reshape(n, n_frames * m), labels,
                                 n_permutations, rng)  # fmt: skip
     peak = vertexwise_test(peaks[:, tested], labels, n_permutations, rng)
@@ -275,4 +366,5 @@ def compare_cycles(
     per_frame = _reshaped(per_frame, (n_frames, m))
     if m < k:
         per_frame, peak, timing = (_spread_maps(t, tested) for t in (per_frame, peak, timing))
-    return CycleTests(per_frame, peak, timing, peaks, times, labels, enhanced, tested)
+    return CycleTests(per_frame, peak, timing, peaks, times, labels, enhanced, tested, measure,
+                      axis, float(min_radius))  # fmt: skip

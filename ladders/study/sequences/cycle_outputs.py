@@ -2,16 +2,18 @@
 
 Written by :func:`write_cycle_tests` into one folder:
 
-* ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm) and
-  time to peak (fraction of the cycle), their ``t`` and FWER-corrected p, the
+* ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm;
+  ``peak_group1_mm``) or, with the rotation measure, signed peak rotation about the
+  long axis (degrees; ``peak_group1_deg``) and time to peak (fraction of the cycle),
+  their ``t`` and FWER-corrected p, the
   smallest per-frame p, and with the peak's TFCE test its enhanced map and FWER p
   (``peak_tfce``, ``peak_tfce_p_fwer``); when only some vertices were tested, a
   ``tested`` column (1 or 0) and ``nan`` statistics elsewhere;
 * ``cycle_frames.csv``: per frame, its fraction of the cycle, the vertices found at
   FWER 5 % (vertices and frames together) and the largest ``|t|``;
 * ``cycle_tests.vtu``: the atlas with those per-vertex columns as point data;
-* ``cycle_curves.png``: each group's mean normal motion through the cycle, over the
-  vertices whose peak differs (all vertices when none does).
+* ``cycle_curves.png``: each group's mean curve (normal motion or rotation) through
+  the cycle, over the vertices whose peak differs (all vertices tested when none does).
 """
 
 from __future__ import annotations
@@ -32,8 +34,8 @@ __all__ = ["write_cycle_tests"]
 def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     a, b = tests.labels, ~tests.labels
     columns = {
-        "peak_group1_mm": tests.peaks[a].mean(axis=0),
-        "peak_group2_mm": tests.peaks[b].mean(axis=0),
+        f"peak_group1_{tests.unit}": tests.peaks[a].mean(axis=0),
+        f"peak_group2_{tests.unit}": tests.peaks[b].mean(axis=0),
         "peak_t": tests.peak.statistic,
         "peak_p_fwer": tests.peak.p_fwer,
         "time_group1": tests.times[a].mean(axis=0),
@@ -99,7 +101,7 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
     found = tests.peak.p_fwer < alpha
     tested = np.ones_like(found) if tests.tested is None else tests.tested
     where = found if found.any() else tested
-    curves = motion.normal()[:, :, where].mean(axis=2)  # (n_subjects, n_frames)
+    curves = tests.curves(motion)[:, :, where].mean(axis=2)  # (n_subjects, n_frames)
     x = np.append(motion.fractions, 1.0)
     fig, ax = plt.subplots(figsize=(5.5, 3.4))
     for label, name, colour in ((True, names[0], "tab:red"), (False, names[1], "tab:blue")):
@@ -110,8 +112,9 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
         ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.2, lw=0)
     what = (f"{int(found.sum())} vertices whose peak differs" if found.any()
             else "all vertices tested")  # fmt: skip
-    ax.set(xlabel="fraction of the cycle", ylabel="normal motion (mm, inward < 0)",
-           title=f"mean over {what}")  # fmt: skip
+    ylabel = ("normal motion (mm, inward < 0)" if tests.measure == "normal"
+              else "rotation (deg, counter-clockwise from the apex > 0)")  # fmt: skip
+    ax.set(xlabel="fraction of the cycle", ylabel=ylabel, title=f"mean over {what}")
     ax.legend(frameon=False)
     fig.tight_layout()
     with atomic_path(path) as tmp:
