@@ -198,17 +198,15 @@ def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, se
                                 _fingerprint(root / "tracked")))  # fmt: skip
         for label, errors, names, frames, source in motions:
             key = f"{name}|{label}|{n}|{n_frames}|{permutations}|{repetitions}|{seed}|{source}|{TESTS}"
+            motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
+                                 c.faces)  # fmt: skip
             if key not in cache:
                 index = [tuple(COHORTS).index(name), 1 + list(IMAGES).index(label.split()[0])
                          if errors is not None else 0]  # fmt: skip
                 rng = np.random.default_rng([seed, *index])
-                motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
-                                     c.faces)  # fmt: skip
                 scores = _scores(motion, c, permutations, repetitions, rng)
                 cache[key] = [name, label, len(names), errors, *scores]
                 cache_path.write_text(json.dumps(cache, indent=1))
-            motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
-                                 c.faces)  # fmt: skip
             out.append((*cache[key], _peak_effect(motion, c)))
             print(out[-1], flush=True)
     return out

@@ -109,8 +109,14 @@ class CycleMotion:
             return self.normal()
         if axis is None:
             raise ValueError("axis: the rotation needs the atlas's apex and base-plane centre")
-        apex, base = (axis.apex, axis.base) if hasattr(axis, "apex") else axis
+        apex, base = _axis_points(axis)
         return self.rotation(apex, base, min_radius)
+
+
+def _axis_points(axis) -> np.ndarray:
+    """The apex and base-plane centre, rows of ``(2, 3)``, from landmarks or an array."""
+    points = np.stack([axis.apex, axis.base]) if hasattr(axis, "apex") else axis
+    return np.asarray(points, dtype=np.float64)
 
 
 def load_cycle_motion(folder) -> CycleMotion:
@@ -344,8 +350,7 @@ def compare_cycles(
         if tested.sum() < 2:
             raise ValueError(f"min_radius: fewer than 2 vertices tested are {min_radius} mm "
                              "or more from the long axis")  # fmt: skip
-        axis = np.stack([axis.apex, axis.base]) if hasattr(axis, "apex") else axis
-        axis = np.asarray(axis, dtype=np.float64)
+        axis = _axis_points(axis)
     else:
         axis = None
     m = int(tested.sum())
