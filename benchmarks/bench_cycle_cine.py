@@ -33,6 +33,11 @@ Measured per cohort and images, beside the same tests on the true frames:
   splits of the controls, with a binomial interval. No transport (the ED meshes are in
   the atlas's correspondence and pose).
 
+With ``--fwhm 10`` the table is ``cycle_cine_smoothed``: the normal peak's tests (max-t
+and TFCE) on the raw maps and on every map smoothed on the atlas by the heat kernel of
+that full width at half maximum (``compare_cycles(..., fwhm=10)``), with the region's
+group difference and effect size of both.
+
 Each stage resumes (the series, the tracked meshes and the table's rows are kept under
 ``--work``).
 """
@@ -143,15 +148,34 @@ def _tests(motion: CycleMotion, labels, es: int, permutations: int, rng, axis):
     )
 
 
-def _scores(motion, c, permutations, repetitions, rng):
+#: The smoothing rows' tests (``--fwhm``), part of their cached rows' key.
+TESTS_SMOOTHED = "normal peak, normal peak TFCE, both on maps smoothed by fwhm"
+
+
+def _tests_smoothed(motion: CycleMotion, labels, es, permutations: int, rng, axis, fwhm):
+    """Significant vertices of the normal peak and its TFCE, on the raw maps and on the
+    maps smoothed by ``fwhm`` (mm)."""
+    raw = compare_cycles(motion, labels, permutations, rng, tfce=True)
+    smooth = compare_cycles(motion, labels, permutations, rng, tfce=True, fwhm=fwhm)
+    return tuple(t for r in (raw, smooth)
+                 for t in (r.peak.p_fwer < 0.05, r.peak_tfce.p_fwer_enhanced < 0.05))  # fmt: skip
+
+
+def _scores(motion, c, permutations, repetitions, rng, fwhm=None):
     es = int(np.argmax(c.fractions))
     labels = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
     region = c.data.region.affected
     axis = synthetic_landmarks(c.data.cohort.atlas)
-    found = _tests(motion, labels, es, permutations, rng, axis)
-    hits = np.zeros(4, dtype=int)
+
+    def tests(m, split, count):
+        if fwhm is None:
+            return _tests(m, split, es, count, rng, axis)
+        return _tests_smoothed(m, split, es, count, rng, axis, fwhm)
+
+    found = tests(motion, labels, permutations)
+    hits = np.zeros(len(found), dtype=int)
     for sub, split in null_splits(motion, np.flatnonzero(~labels), rng, repetitions):
-        found_null = _tests(sub, split, es, min(permutations, 500), rng, axis)
+        found_null = tests(sub, split, min(permutations, 500))
         hits += [bool(f.any()) for f in found_null]
     out = []
     for f, h in zip(found, hits):
@@ -160,10 +184,11 @@ def _scores(motion, c, permutations, repetitions, rng):
     return out
 
 
-def _peak_effect(motion: CycleMotion, c) -> tuple[float, float]:
+def _peak_effect(motion: CycleMotion, c, fwhm=None) -> tuple[float, float]:
     """Over the planted region: the mean group difference of the peak inward motion
-    (patients minus controls, mm) and its mean effect size (over the pooled SD)."""
-    peaks = curve_peaks(motion.normal())[0][:, c.data.region.affected]
+    (patients minus controls, mm) and its mean effect size (over the pooled SD); with
+    ``fwhm``, of the maps smoothed first."""
+    peaks = curve_peaks(motion.curves(fwhm=fwhm))[0][:, c.data.region.affected]
     labels = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
     a, b = peaks[labels], peaks[~labels]
     difference = a.mean(axis=0) - b.mean(axis=0)
@@ -180,9 +205,12 @@ def _fingerprint(folder: Path) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, seed=0) -> list:
+def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, seed=0,
+         fwhm=None) -> list:  # fmt: skip
     """The table's rows; each (cohort, motion) with its own random stream, kept in
-    ``WORK/rows.json`` as it finishes and reused while its inputs are the same."""
+    ``WORK/rows.json`` as it finishes and reused while its inputs are the same. With
+    ``fwhm``: the normal peak's tests on raw and smoothed maps."""
+    tests = TESTS if fwhm is None else f"{TESTS_SMOOTHED} = {fwhm:g}"
     cache_path = work / "rows.json"
     cache = json.loads(cache_path.read_text()) if cache_path.is_file() else {}
     work.mkdir(parents=True, exist_ok=True)
@@ -197,19 +225,61 @@ def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, se
                 motions.append((f"{kind} cine, tracked", _errors(c, names, frames), names, frames,
                                 _fingerprint(root / "tracked")))  # fmt: skip
         for label, errors, names, frames, source in motions:
-            key = f"{name}|{label}|{n}|{n_frames}|{permutations}|{repetitions}|{seed}|{source}|{TESTS}"
+            key = f"{name}|{label}|{n}|{n_frames}|{permutations}|{repetitions}|{seed}|{source}|{tests}"
             motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
                                  c.faces)  # fmt: skip
             if key not in cache:
                 index = [tuple(COHORTS).index(name), 1 + list(IMAGES).index(label.split()[0])
                          if errors is not None else 0]  # fmt: skip
                 rng = np.random.default_rng([seed, *index])
-                scores = _scores(motion, c, permutations, repetitions, rng)
+                scores = _scores(motion, c, permutations, repetitions, rng, fwhm)
                 cache[key] = [name, label, len(names), errors, *scores]
                 cache_path.write_text(json.dumps(cache, indent=1))
-            out.append((*cache[key], _peak_effect(motion, c)))
+            effects = [_peak_effect(motion, c)]
+            if fwhm is not None:
+                effects.append(_peak_effect(motion, c, fwhm))
+            out.append((*cache[key], *effects))
             print(out[-1], flush=True)
     return out
+
+
+def _errors_cell(err) -> str:
+    return "truth" if err is None else f"{err[0]:.2f} / {err[1]:.2f}, {err[2]:.2f}"
+
+
+def _note(n_frames, permutations, repetitions) -> str:
+    return (
+        f"Synthetic subjects through {n_frames} frames (ES at 35 %), short-axis cine series of "
+        "1.5 x 1.5 x 8 mm with the cohort writer's noise, tagged (lines 7 mm apart) or not; "
+        "each subject's true ED mesh (in the atlas's correspondence) tracked with the "
+        "default cine settings (every frame registered to ED). Twist: 5 degrees about the "
+        "long axis in segments 7, 8, 13, 14; hypokinesia_mild: a fifth of the motion in the "
+        f"same segments. {permutations:,} permutations, FWER 5 %; null: {repetitions} random "
+        "10-against-10 splits of the controls (500 permutations each). No transport."
+    )
+
+
+def _table_smoothed(rows, n_frames, permutations, repetitions, fwhm) -> str:
+    lines = [
+        "| cohort | motion | subjects | ES error normal / along the wall (mm), twist error "
+        "(deg) | normal peak (t): power / Dice, null FWER [95 % CI] | normal peak with TFCE | "
+        f"maps smoothed {fwhm:g} mm FWHM: normal peak (t) | maps smoothed, normal peak with "
+        "TFCE | normal peak in the planted region: group difference (mm), effect size, raw; "
+        "smoothed |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, label, n, err, *tests, raw, smooth in rows:
+        cells = [f"{p:.2f} / {d:.2f}, {r:.2f} [{lo:.2f}, {hi:.2f}]" for p, d, r, lo, hi in tests]
+        cells.append(f"{raw[0]:.2f}, {raw[1]:.2f}; {smooth[0]:.2f}, {smooth[1]:.2f}")
+        lines.append(f"| {name} | {label} | {n} | {_errors_cell(err)} | " + " | ".join(cells)
+                     + " |")  # fmt: skip
+    note = _note(n_frames, permutations, repetitions) + (
+        f" Smoothed: every subject's normal-motion map at every frame smoothed on the atlas "
+        f"by the heat kernel of {fwhm:g} mm full width at half maximum before the tests "
+        f"(`cycle-analyze --fwhm {fwhm:g}`); the raw and smoothed tests of a row share its "
+        "random stream."
+    )
+    return note + "\n\n" + "\n".join(lines) + "\n"
 
 
 def _table(rows, n_frames, permutations, repetitions) -> str:
@@ -222,19 +292,11 @@ def _table(rows, n_frames, permutations, repetitions) -> str:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for name, label, n, err, *tests, effect in rows:
-        e = "truth" if err is None else f"{err[0]:.2f} / {err[1]:.2f}, {err[2]:.2f}"
+        e = _errors_cell(err)
         cells = [f"{p:.2f} / {d:.2f}, {r:.2f} [{lo:.2f}, {hi:.2f}]" for p, d, r, lo, hi in tests]
         cells.append(f"{effect[0]:.2f}, {effect[1]:.2f}")
         lines.append(f"| {name} | {label} | {n} | {e} | " + " | ".join(cells) + " |")
-    note = (
-        f"Synthetic subjects through {n_frames} frames (ES at 35 %), short-axis cine series of "
-        "1.5 x 1.5 x 8 mm with the cohort writer's noise, tagged (lines 7 mm apart) or not; "
-        "each subject's true ED mesh (in the atlas's correspondence) tracked with the "
-        "default cine settings (every frame registered to ED). Twist: 5 degrees about the "
-        "long axis in segments 7, 8, 13, 14; hypokinesia_mild: a fifth of the motion in the "
-        f"same segments. {permutations:,} permutations, FWER 5 %; null: {repetitions} random "
-        "10-against-10 splits of the controls (500 permutations each). No transport."
-    )
+    note = _note(n_frames, permutations, repetitions)
     return note + "\n\n" + "\n".join(lines) + "\n"
 
 
@@ -246,6 +308,9 @@ def main(argv=None) -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--quick", action="store_true", help="12 subjects, 10 frames")
     parser.add_argument("--no-run", action="store_true", help="only the tests of what is tracked")
+    parser.add_argument("--fwhm", type=float, default=None,
+                        help="instead: the normal peak's tests on raw maps and on maps smoothed "
+                             "by this FWHM (mm), published as cycle_cine_smoothed")  # fmt: skip
     parser.add_argument("--publish", action="store_true")
     args = parser.parse_args(argv)
     print(machine(), flush=True)
@@ -256,8 +321,12 @@ def main(argv=None) -> None:
         for name in args.cohorts:
             for kind in args.images:
                 run_route(work, name, kind, n, n_frames, args.jobs)
-    table = _table(rows(work, args.cohorts, args.images, n, n_frames, permutations,
-                        repetitions), n_frames, permutations, repetitions)  # fmt: skip
+    found = rows(work, args.cohorts, args.images, n, n_frames, permutations, repetitions,
+                 fwhm=args.fwhm)  # fmt: skip
+    if args.fwhm is None:
+        table = _table(found, n_frames, permutations, repetitions)
+    else:
+        table = _table_smoothed(found, n_frames, permutations, repetitions, args.fwhm)
     missing = [f"{name} through {kind} cine" for name in args.cohorts for kind in args.images
                if not (work / f"{name}_{kind}" / "tracked").is_dir()]  # fmt: skip
     if missing:
@@ -268,8 +337,11 @@ def main(argv=None) -> None:
     if args.publish:
         # the stages resume: a run with --no-run publishes what the full command computes
         command = "python benchmarks/bench_cycle_cine.py --cohorts "
-        command += " ".join(args.cohorts) + " --images " + " ".join(args.images) + " --publish"
-        publish("cycle_cine", table, command)
+        command += " ".join(args.cohorts) + " --images " + " ".join(args.images)
+        if args.fwhm is not None:
+            command += f" --fwhm {args.fwhm:g}"
+        publish("cycle_cine" if args.fwhm is None else "cycle_cine_smoothed", table,
+                command + " --publish")  # fmt: skip
 
 
 if __name__ == "__main__":

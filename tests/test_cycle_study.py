@@ -168,6 +168,49 @@ def test_tfce_on_the_peak_keeps_a_region_that_vertex_noise_hides():
                           np.random.default_rng(2)).peak_tfce is None  # fmt: skip
 
 
+def test_smoothing_the_maps_finds_a_region_that_vertex_noise_hides():
+    """The same fixed per-vertex error as above: every map smoothed on the atlas (10 mm
+    FWHM) before the tests finds more of the planted region than the raw maps, with as
+    few false vertices, and nothing under the null; the curves tested are the smoothed
+    ones; the rotation is smoothed off the axis only."""
+    from ladders.statistics import SurfaceSmoother
+
+    c = make_two_group_cycles(n_subjects=24, n_frames=12, n_vertices=300, seed=4)
+    d = c.frames - c.frames[:, :1]
+    rng = np.random.default_rng(1)
+    error = rng.normal(size=(d.shape[0], 1, d.shape[2], 3)) * 1.5 / np.sqrt(3)
+    motion = CycleMotion(c.names, d + error * (np.arange(d.shape[1]) > 0)[None, :, None, None],
+                         c.data.cohort.atlas, c.faces)  # fmt: skip
+    raw = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0))
+    smooth = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), fwhm=10.0)
+    assert raw.fwhm is None and smooth.fwhm == 10.0
+    smoother = SurfaceSmoother(motion.atlas, motion.faces, 10.0)
+    np.testing.assert_allclose(smooth.curves(motion), smoother(motion.normal()), atol=1e-12)
+    region = c.data.region.weight > 0
+    found_raw, found = raw.peak.p_fwer < 0.05, smooth.peak.p_fwer < 0.05
+    print(f"region found: {found_raw[region].mean():.2f} raw, {found[region].mean():.2f} "
+          f"smoothed; outside {(found_raw & ~region).sum()}, {(found & ~region).sum()}")  # fmt: skip
+    assert found[region].mean() >= found_raw[region].mean() + 0.1
+    assert (found & ~region).sum() <= 0.03 * len(region)
+    controls = np.flatnonzero(~c.patients)
+    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
+                       motion.atlas, motion.faces)  # fmt: skip
+    null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000,
+                                np.random.default_rng(2), fwhm=10.0)  # fmt: skip
+    assert (null_tests.peak.p_fwer < 0.05).sum() <= 0.01 * len(region)
+    lm = synthetic_landmarks(c.data.cohort.atlas)
+    turned = compare_cycles(motion, c.patients, 10, np.random.default_rng(0), fwhm=10.0,
+                            measure="rotation", axis=lm)  # fmt: skip
+    rotation = turned.curves(motion)
+    near = ~np.isfinite(rotation).all(axis=(0, 1))
+    assert near.any() and (turned.tested == ~near).all()
+    mask = SurfaceSmoother(motion.atlas, motion.faces, 10.0, mask=~near)
+    np.testing.assert_allclose(rotation[..., ~near],
+                               mask(motion.curves("rotation", lm))[..., ~near], atol=1e-12)  # fmt: skip
+    with pytest.raises(ValueError, match="fwhm: expected a width"):
+        compare_cycles(motion, c.patients, 10, np.random.default_rng(0), fwhm=-1.0)
+
+
 def _apical_cap(c) -> np.ndarray:
     """The atlas's AHA segment 17 (the apical cap)."""
     lm = synthetic_landmarks(c.data.cohort.atlas)
@@ -309,6 +352,17 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
                  "--permutations", "200"]) == 0  # fmt: skip
     assert "vertices found at FWER 5 %" in capsys.readouterr().out
+    raw = np.loadtxt(study / "analysis" / "cycle_vertices.csv", delimiter=",", skiprows=1,
+                     usecols=1)  # fmt: skip
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--permutations", "200", "--fwhm", "12", "-o", str(tmp_path / "fwhm")]) == 0  # fmt: skip
+    assert ", smoothed 12 mm FWHM: " in capsys.readouterr().out
+    smooth = np.loadtxt(tmp_path / "fwhm" / "cycle_vertices.csv", delimiter=",", skiprows=1,
+                        usecols=1)  # fmt: skip
+    assert 0 < np.std(smooth) < np.std(raw)  # the group's mean peak map, smoothed
+    assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
+                 "--fwhm", "0"]) == 2  # fmt: skip
+    assert "--fwhm" in capsys.readouterr().err
     lm = synthetic_landmarks(atlas)
     (tmp_path / "aha.json").write_text(json.dumps({"apex": lm.apex.tolist(), "base_centre":
         lm.base.tolist(), "septal_point": lm.septum.tolist()}))  # fmt: skip

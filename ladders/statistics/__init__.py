@@ -21,6 +21,9 @@ SPD matrices as on LDDMM momenta; the group tests and the linear model take arra
 - :mod:`.survival`: :func:`cross_validated_c_index` and
   :func:`cross_validated_c_index_from_motion` (Cox regression, lifelines; cross-validated
   C-index with a bootstrap interval), :func:`c_index`, :func:`simulate_survival`;
+- :mod:`.surface_smoothing`: :func:`smooth_surface_data` and :class:`SurfaceSmoother`
+  (heat-kernel smoothing of per-vertex maps by a full width at half maximum),
+  :func:`fwhm_to_time`;
 - :mod:`.tfce`: :func:`tfce` (threshold-free cluster enhancement on a mesh's
   adjacency), :func:`tfce_enhancer` (the ``enhance`` of :func:`glm_test`),
   :func:`tfce_step`, :func:`mesh_adjacency`.
@@ -42,6 +45,7 @@ from .permutation_glm import (
     tfce_from_observed,
     two_sided,
 )
+from .surface_smoothing import SurfaceSmoother, fwhm_to_time, smooth_surface_data
 from .survival import (
     SurvivalResult,
     c_index,
@@ -64,6 +68,9 @@ __all__ = [
     "check_groups",
     "global_test",
     "vertexwise_test",
+    "SurfaceSmoother",
+    "fwhm_to_time",
+    "smooth_surface_data",
     "METRICS",
     "TangentPCA",
     "mode_shapes",

@@ -79,6 +79,10 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
                    help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
                         "landmark table's row 'atlas'): tables and bull's-eyes per AHA segment")  # fmt: skip
+    p.add_argument("--fwhm", type=positive_float, default=None, metavar="MM",
+                   help="with the linear model (--design, --tfce or --aha): smooth every "
+                        "subject's maps on the atlas before the tests, by the heat kernel of "
+                        "this full width at half maximum (mm)")  # fmt: skip
     p.add_argument("--compare", type=_pair, default=None, metavar="A,B",
                    help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
     p.add_argument("--truth", type=existing_file, default=None,
@@ -152,7 +156,7 @@ def run_analyze_command(args) -> int:
         f"AUC {c.classifier.auc:.2f} [{c.classifier.ci_low:.2f}, {c.classifier.ci_high:.2f}]"
     )
     folder = Path(outcome.paths["summary.md"]).parent
-    if args.tfce or args.aha is not None:
+    if args.tfce or args.aha is not None or args.fwhm is not None:
         args.design_table = {"subject": list(groups), "group": list(groups.values())}
         args.model = "group"
         args.contrast = [f"group[{c.groups[0]}] - group[{c.groups[1]}]"]
@@ -165,7 +169,8 @@ def run_analyze_command(args) -> int:
 
 
 def _run_model(args) -> int:
-    """The linear-model analysis (``--design``, or the groups with ``--tfce`` / ``--aha``)."""
+    """The linear-model analysis (``--design``, or the groups with ``--tfce`` / ``--aha`` /
+    ``--fwhm``)."""
     from ladders.statistics import read_design
 
     from ..errors import CohortError
@@ -199,13 +204,15 @@ def _run_model(args) -> int:
             aha_landmarks=landmarks, blocks=args.blocks,
             normalize=None if args.normalize == "none" else args.normalize, alpha=args.alpha,
             seed=args.seed, progress=not args.no_progress, figures=not args.no_figures,
+            fwhm=args.fwhm,
         )  # fmt: skip
     except (CohortError, ValueError) as exc:
         raise UsageError(f"symladders analyze: error: {exc}") from None
     k = outcome.comparisons[0].motion.atlas.shape[0]
     n = len(outcome.comparisons[0].design.subjects)
     print(f"symladders analyze: model '{args.model}', {n} subjects, "
-          f"{len(outcome.comparisons)} motion(s) x contrast(s), {k} atlas vertices")  # fmt: skip
+          f"{len(outcome.comparisons)} motion(s) x contrast(s), {k} atlas vertices"
+          + ("" if args.fwhm is None else f", maps smoothed {args.fwhm:g} mm FWHM"))  # fmt: skip
     if outcome.left_out:
         print(f"left out (not in the design): {', '.join(outcome.left_out)}")
     for c in outcome.main:

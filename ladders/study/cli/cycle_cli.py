@@ -86,6 +86,10 @@ def add_cycle_parsers(sub) -> None:
     q.add_argument("--min-radius", type=positive_float, default=5.0,
                    help="with --measure rotation: vertices closer to the long axis than this "
                         "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
+    q.add_argument("--fwhm", type=positive_float, default=None, metavar="MM",
+                   help="smooth every subject's map at every frame on the atlas before the "
+                        "tests, by the heat kernel of this full width at half maximum (mm); "
+                        "default: not smoothed")  # fmt: skip
     q.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
                    help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
                         "landmark table's row 'atlas'): places the AHA segments for "
@@ -200,7 +204,7 @@ def run_cycle_analyze_command(args) -> int:
         tests = compare_cycles(motion, labels, args.permutations,
                                np.random.default_rng(args.seed), tfce=args.tfce,
                                vertices=tested, measure=args.measure, axis=axis,
-                               min_radius=args.min_radius)  # fmt: skip
+                               min_radius=args.min_radius, fwhm=args.fwhm)  # fmt: skip
     except ValueError as exc:  # e.g. a group of fewer than 3 subjects
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
     output = Path(args.output) if args.output else Path(args.study) / "analysis"
@@ -209,7 +213,9 @@ def run_cycle_analyze_command(args) -> int:
     frames = (tests.per_frame.p_fwer < 0.05).any(axis=0).sum()
     print(
         f"symladders cycle-analyze: {names[0]} ({int(tests.labels.sum())}) against {names[1]} "
-        f"({int((~tests.labels).sum())}), {args.permutations:,} permutations: vertices found at "
+        f"({int((~tests.labels).sum())}), {args.permutations:,} permutations"
+        + ("" if tests.fwhm is None else f", smoothed {tests.fwhm:g} mm FWHM")
+        + ": vertices found at "
         f"FWER 5 %: peak {'rotation ' if tests.measure == 'rotation' else ''}{found[0]}"
         + ("" if tests.peak_tfce is None
            else f" (TFCE: {int((tests.peak_tfce.p_fwer_enhanced < 0.05).sum())})")

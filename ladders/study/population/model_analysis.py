@@ -262,6 +262,7 @@ def analyze_model(
     seed: int = 0,
     progress: bool = True,
     figures: bool = True,
+    fwhm: float | None = None,
 ) -> ModelOutcome:
     """Test the contrasts of a linear model on a study's transported motion; write the analysis.
 
@@ -292,6 +293,9 @@ def analyze_model(
     alpha : float
     seed : int
     progress, figures : bool
+    fwhm : float, optional
+        Smooth every subject's maps on the atlas before the tests (mm, full width at
+        half maximum; :func:`~.model_comparison.compare_model`).
 
     Returns
     -------
@@ -335,6 +339,7 @@ def analyze_model(
             segments=segments,
             blocks=block_labels,
             progress=progress,
+            fwhm=fwhm,
         )  # fmt: skip
         for spec in contrasts
         for m in motions
@@ -343,6 +348,8 @@ def analyze_model(
     folder = Path(output) if output is not None else Path(study_output) / "analysis"
     folder.mkdir(parents=True, exist_ok=True)
     header = f"Study: {Path(study_output).resolve()}; {len(kept)} subjects; seed {seed}."
+    if fwhm is not None:
+        header += f" Maps smoothed on the atlas, {fwhm:g} mm FWHM."
     if left_out:
         header += f" Left out (not in the design table): {', '.join(left_out)}."
     paths = {}

@@ -16,6 +16,9 @@ Options:
 * ``tfce=True``: threshold-free cluster enhancement on the atlas's triangle
   adjacency (:func:`ladders.statistics.tfce`, ``H = 2``, ``E = 1``, both tails
   of a ``t``), with its own family-wise error from the same permutations;
+* ``fwhm``: every subject's maps smoothed on the atlas by the heat kernel of that full
+  width at half maximum (mm; :class:`ladders.statistics.SurfaceSmoother`, each
+  component of the displacement alike) before the tests, vertex and segment alike;
 * ``segments``: the AHA segment of each atlas vertex
   (:func:`~.aha_model.aha_segments`): the same model on each subject's mean over each
   of the 17 segments, corrected over the segments.
@@ -31,7 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ladders.statistics import Design, contrast_matrix, glm_test, mesh_adjacency
+from ladders.statistics import (
+    Design,
+    SurfaceSmoother,
+    contrast_matrix,
+    glm_test,
+    mesh_adjacency,
+)
 from manifolds.validation import check_int, check_rng
 
 from ..errors import CohortError
@@ -92,15 +101,22 @@ class ModelComparison:
         return result.significant(alpha, enhanced=tfce)
 
 
-def model_responses(motion: TransportedMotion) -> dict:
-    """The responses of the per-vertex tests: ``{name: (n, k, 3) or (n, k)}``."""
+def model_responses(motion: TransportedMotion, fwhm: float | None = None) -> dict:
+    """The responses of the per-vertex tests: ``{name: (n, k, 3) or (n, k)}``; with
+    ``fwhm`` (mm), smoothed on the atlas (the displacement component by component)."""
     normals = outward_vertex_normals(motion.atlas, motion.faces)
-    return {
+    responses = {
         "displacement": motion.displacement,
         "normal": np.einsum("nkd,kd->nk", motion.displacement, normals),
         "strain": motion.strain,
         "wall_motion": motion.wall_motion,
     }
+    if fwhm is None:
+        return responses
+    smoother = SurfaceSmoother(motion.atlas, motion.faces, fwhm)
+    smoothed = {t: smoother(r) for t, r in responses.items() if t != "displacement"}
+    vectors = np.moveaxis(smoother(np.moveaxis(motion.displacement, -1, -2)), -1, -2)
+    return {"displacement": vectors, **smoothed}
 
 
 def _effect(test) -> np.ndarray | None:
@@ -120,6 +136,7 @@ def compare_model(
     blocks=None,
     method: str = "freedman_lane",
     progress: bool = False,
+    fwhm: float | None = None,
 ) -> ModelComparison:
     """Test one contrast of a linear model at every atlas vertex (see the module).
 
@@ -142,6 +159,8 @@ def compare_model(
         Exchangeability blocks (e.g. the site): permutations within blocks only.
     method : {"freedman_lane", "manly", "draper_stoneman"}
     progress : bool
+    fwhm : float, optional
+        Smooth every subject's maps on the atlas first (mm, full width at half maximum).
 
     Returns
     -------
@@ -152,7 +171,7 @@ def compare_model(
     if list(design.subjects) != list(motion.subjects):
         raise CohortError("design: its subjects are not the motion's, in the motion's order")
     name, c = contrast_matrix(design, contrast)
-    responses = model_responses(motion)
+    responses = model_responses(motion, fwhm)
     adjacency = mesh_adjacency(motion.faces, motion.atlas.shape[0]) if tfce else None
     tests = {test: glm_test(responses[test], design, c, n_permutations, rng, method, blocks,
                             tfce=adjacency, progress=progress)

@@ -26,6 +26,14 @@ With ``vertices`` only part of the atlas is tested (e.g. without the apical cap,
 segment 17, which thick short-axis slices resolve poorly): the FWER is over those
 vertices, and the others have ``NaN`` statistics and p-values.
 
+With ``fwhm`` every subject's curve map at every frame is first smoothed on the
+atlas by the heat kernel of that full width at half maximum (mm,
+:class:`~ladders.statistics.SurfaceSmoother`), as vertex-wise surface analyses
+smooth their data (FreeSurfer's ``mri_glmfit --fwhm``): the tracking's errors, which
+vary from vertex to vertex, average out, while a regional effect of several
+centimetres stays; the permutations stay exact (every subject is smoothed alike).
+The rotation is smoothed over its vertices off the axis.
+
 With ``tfce=True`` the peak is also tested with threshold-free cluster enhancement
 on the atlas's mesh (:func:`~ladders.statistics.glm_test`, ``H = 2``, ``E = 1``, FWER
 over the vertices of the enhanced maps): a regional effect measured through noisy
@@ -41,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...statistics import glm_test, vertexwise_test
+from ...statistics import SurfaceSmoother, glm_test, vertexwise_test
 from ...statistics.group_tests import VertexwiseTest
 from ...statistics.permutation_glm import GLMTest
 from ...statistics.tfce import mesh_adjacency
@@ -99,18 +107,27 @@ class CycleMotion:
         return rotation_about_axis(self.atlas, self.atlas + self.displacement, apex, base,
                                    min_radius)  # fmt: skip
 
-    def curves(self, measure: str = "normal", axis=None, min_radius: float = 5.0) -> np.ndarray:
+    def curves(self, measure: str = "normal", axis=None, min_radius: float = 5.0,
+               fwhm: float | None = None) -> np.ndarray:  # fmt: skip
         """The curve tested per vertex: :meth:`normal` or :meth:`rotation` about ``axis``
         (the apex and base-plane centre, shape ``(2, 3)``, or landmarks with ``apex``
-        and ``base``); shape ``(n_subjects, n_frames, k)``."""
+        and ``base``); shape ``(n_subjects, n_frames, k)``. With ``fwhm`` (mm), every
+        subject's map at every frame is smoothed on the atlas by the heat kernel of that
+        full width at half maximum (:class:`~ladders.statistics.SurfaceSmoother`; the
+        rotation over its vertices off the axis)."""
         if measure not in MEASURES:
             raise ValueError(f"measure: expected one of {sorted(MEASURES)}, got {measure!r}")
         if measure == "normal":
-            return self.normal()
-        if axis is None:
-            raise ValueError("axis: the rotation needs the atlas's apex and base-plane centre")
-        apex, base = _axis_points(axis)
-        return self.rotation(apex, base, min_radius)
+            curves = self.normal()
+        else:
+            if axis is None:
+                raise ValueError("axis: the rotation needs the atlas's apex and base-plane centre")
+            apex, base = _axis_points(axis)
+            curves = self.rotation(apex, base, min_radius)
+        if fwhm is None:
+            return curves
+        finite = np.isfinite(curves).all(axis=(0, 1))
+        return SurfaceSmoother(self.atlas, self.faces, fwhm, mask=finite)(curves)
 
 
 def _axis_points(axis) -> np.ndarray:
@@ -216,6 +233,9 @@ class CycleTests:
         The apex and base-plane centre of the rotation; None for the normal motion.
     min_radius : float
         The rotation's distance to the axis below which vertices are not tested.
+    fwhm : float or None
+        The full width at half maximum (mm) of the smoothing of every map before the
+        tests; None: not smoothed.
     """
 
     per_frame: VertexwiseTest
@@ -229,6 +249,7 @@ class CycleTests:
     measure: str = "normal"
     axis: np.ndarray | None = None
     min_radius: float = 5.0
+    fwhm: float | None = None
 
     @property
     def unit(self) -> str:
@@ -237,7 +258,7 @@ class CycleTests:
 
     def curves(self, motion: CycleMotion) -> np.ndarray:
         """The curves these tests were computed on, ``(n_subjects, n_frames, k)``."""
-        return motion.curves(self.measure, self.axis, self.min_radius)
+        return motion.curves(self.measure, self.axis, self.min_radius, self.fwhm)
 
 
 #: The per-vertex maps of a VertexwiseTest, and those a GLMTest adds.
@@ -305,6 +326,7 @@ def compare_cycles(
     measure: str = "normal",
     axis=None,
     min_radius: float = 5.0,
+    fwhm: float | None = None,
 ) -> CycleTests:
     """Test two groups' cycles per frame and on the peak and time to peak (see the module).
 
@@ -328,6 +350,9 @@ def compare_cycles(
         the rotation.
     min_radius : float, default 5.0
         For the rotation: vertices closer to the axis than this (mm) are not tested.
+    fwhm : float, optional
+        Smooth every subject's map at every frame on the atlas before the tests, by
+        the heat kernel of this full width at half maximum (mm; see the module).
 
     Returns
     -------
@@ -341,7 +366,11 @@ def compare_cycles(
     labels = np.asarray(groups, dtype=bool)
     if labels.shape != (len(motion.subjects),):
         raise ValueError(f"groups: expected {len(motion.subjects)} labels, got {labels.shape}")
-    curves = motion.curves(measure, axis, min_radius)
+    if fwhm is not None:
+        fwhm = float(fwhm)
+        if not np.isfinite(fwhm) or fwhm <= 0:
+            raise ValueError(f"fwhm: expected a width > 0 mm, got {fwhm}")
+    curves = motion.curves(measure, axis, min_radius, fwhm)
     n, n_frames, k = curves.shape
     tested = _tested(vertices, k)
     finite = np.isfinite(curves).all(axis=(0, 1))  # the rotation's vertices off the axis
@@ -372,4 +401,4 @@ def compare_cycles(
     if m < k:
         per_frame, peak, timing = (_spread_maps(t, tested) for t in (per_frame, peak, timing))
     return CycleTests(per_frame, peak, timing, peaks, times, labels, enhanced, tested, measure,
-                      axis, float(min_radius))  # fmt: skip
+                      axis, float(min_radius), fwhm)  # fmt: skip
