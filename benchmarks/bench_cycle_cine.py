@@ -330,9 +330,7 @@ def main(argv=None) -> None:
     missing = [f"{name} through {kind} cine" for name in args.cohorts for kind in args.images
                if not (work / f"{name}_{kind}" / "tracked").is_dir()]  # fmt: skip
     if missing:
-        table = table.replace(
-            "No transport.\n", f"No transport. Not run: {', '.join(missing)}.\n", 1
-        )
+        table = table.replace("No transport.", f"No transport. Not run: {', '.join(missing)}.", 1)
     print("\n" + table)
     if args.publish:
         # the stages resume: a run with --no-run publishes what the full command computes
