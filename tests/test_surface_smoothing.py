@@ -1,5 +1,7 @@
 """Heat-kernel smoothing on a mesh: closed forms on the sphere and the plane, invariants, bad input."""
 
+import functools
+
 import numpy as np
 import pytest
 import trimesh
@@ -11,6 +13,12 @@ from ladders.statistics import SurfaceSmoother, fwhm_to_time, smooth_surface_dat
 R = 30.0
 SPHERES = {s: trimesh.creation.icosphere(subdivisions=s, radius=R) for s in (2, 3, 4)}
 SPHERE = SPHERES[3]
+
+
+@functools.cache
+def _sphere_smoother(sub: int, fwhm: float) -> SurfaceSmoother:
+    """The dense kernel on the two coarser spheres, the sparse exponential on the finest."""
+    return SurfaceSmoother(SPHERES[sub].vertices, SPHERES[sub].faces, fwhm, dense_max=1000)
 
 
 def _harmonics(v):
@@ -54,9 +62,9 @@ def test_spherical_harmonics_decay_by_their_eigenvalue(degree):
     fwhm = 20.0
     expected = np.exp(-fwhm_to_time(fwhm) * degree * (degree + 1) / R**2)
     errors = []
-    for m in SPHERES.values():
+    for sub, m in SPHERES.items():
         g = _harmonics(m.vertices)[degree]
-        u = smooth_surface_data(g, m.vertices, m.faces, fwhm)
+        u = _sphere_smoother(sub, fwhm)(g)
         # the map stays the harmonic, scaled by the exponential of its eigenvalue
         factor = (u @ g) / (g @ g)
         assert np.abs(u - factor * g).max() < 0.01 * np.abs(g).max()
@@ -109,6 +117,16 @@ def test_linear_and_within_the_data_range(seed, fwhm, scale):
     assert u.max() <= x.max() + 1e-10 and u.min() >= x.min() - 1e-10
 
 
+@pytest.mark.parametrize("fwhm", [4.0, 25.0])
+def test_the_dense_kernel_equals_the_sparse_exponential(fwhm):
+    v, f = _open_cup()
+    x = np.random.default_rng(3).standard_normal((3, len(v)))
+    dense = SurfaceSmoother(v, f, fwhm)
+    sparse = SurfaceSmoother(v, f, fwhm, dense_max=0)
+    assert dense._kernel is not None and sparse._kernel is None
+    np.testing.assert_allclose(dense(x), sparse(x), atol=1e-10)
+
+
 def test_batches_equal_the_loop():
     x = np.random.default_rng(1).standard_normal((2, 3, len(SPHERE.vertices)))
     smoother = SurfaceSmoother(SPHERE.vertices, SPHERE.faces, 12.0)
@@ -140,6 +158,8 @@ def test_a_mask_smooths_its_own_surface_and_leaves_the_rest():
         (lambda v, f: SurfaceSmoother(v, f, 5.0, mask=np.ones(3, bool)), "mask"),
         (lambda v, f: SurfaceSmoother(v, f, 5.0, mask=np.zeros(len(v), bool)), "mask"),
         (lambda v, f: SurfaceSmoother(v, f, 5.0)(np.zeros(len(v) + 1)), "values"),
+        (lambda v, f: SurfaceSmoother(v, f, 5.0, dense_max=-1), "dense_max"),
+        (lambda v, f: SurfaceSmoother(v, f, 5.0, dense_max=2.5), "dense_max"),
         (lambda v, f: SurfaceSmoother(v, f, 5.0)(np.full(len(v), np.nan)), "values"),
     ],
 )

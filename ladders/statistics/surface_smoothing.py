@@ -12,9 +12,14 @@ initial temperature, and the smoothed map is the temperature after a time ``t``,
     M \frac{du}{dt} = L u, \quad u(0) = f, \qquad u(t) = e^{t M^{-1} L} f,
 
 with ``L`` the cotangent Laplacian and ``M`` the lumped (Voronoi) mass matrix of
-the mesh (libigl's ``cotmatrix`` and ``massmatrix``); the exponential is applied
-by SciPy's ``expm_multiply`` (Al-Mohy and Higham's truncated Taylor series, to
-double precision), not by a fixed number of implicit steps. On a plane the heat
+the mesh (libigl's ``cotmatrix`` and ``massmatrix``). The exponential is exact, not
+a fixed number of implicit steps: on meshes of at most ``dense_max`` vertices (an
+atlas) it is formed once from the eigendecomposition of the symmetric
+``M^{-1/2} L M^{-1/2} = U diag(w) U^T``,
+``e^{t M^{-1} L} = M^{-1/2} U diag(e^{t w}) U^T M^{1/2}``, and each map costs one
+matrix product; on larger meshes it is applied by SciPy's ``expm_multiply``
+(Al-Mohy and Higham's truncated Taylor series, to double precision).
+``benchmarks/bench_surface_smoothing.py`` times both. On a plane the heat
 kernel at time ``t`` is the Gaussian of variance ``2 t`` per axis, so a requested
 full width at half maximum gives
 
@@ -75,13 +80,22 @@ class SurfaceSmoother:
     mask : array of bool, shape (k,), optional
         Smooth on the triangles whose three vertices are in the mask; the other
         vertices are left as they are.
+    dense_max : int, default 4000
+        Up to this many smoothed vertices the kernel is formed as a dense matrix
+        (``k^2`` floats; 128 MB at 4,000); above, ``expm_multiply`` applies it.
     """
 
-    def __init__(self, vertices, faces, fwhm: float, mask=None):
+    def __init__(self, vertices, faces, fwhm: float, mask=None, dense_max: int = 4000):
         v, f = _check_mesh(vertices, faces)
         fwhm = float(fwhm)
         if not np.isfinite(fwhm) or fwhm <= 0:
             raise ValueError(f"fwhm: expected a width > 0, got {fwhm}")
+        if (
+            isinstance(dense_max, bool)
+            or not isinstance(dense_max, (int, np.integer))
+            or (dense_max < 0)
+        ):
+            raise ValueError(f"dense_max: expected a vertex count >= 0, got {dense_max!r}")
         k = len(v)
         if mask is None:
             mask = np.ones(k, dtype=bool)
@@ -103,7 +117,16 @@ class SurfaceSmoother:
         if not (mass > 0).all():
             raise ValueError("vertices: the mesh has triangles of zero area around some vertex")
         self.mass = mass
-        self._generator = (sp.diags(1.0 / mass) @ laplacian).tocsr() * self.time
+        self._generator = self._kernel = None
+        if len(mass) <= dense_max:
+            root = np.sqrt(mass)
+            symmetric = laplacian.toarray() / root[:, None] / root[None, :]
+            w, u = np.linalg.eigh(0.5 * (symmetric + symmetric.T))
+            self._kernel = ((u / root[:, None]) * np.exp(self.time * np.minimum(w, 0.0))) @ (
+                u.T * root[None, :]
+            )
+        else:
+            self._generator = (sp.diags(1.0 / mass) @ laplacian).tocsr() * self.time
 
     def __call__(self, values) -> np.ndarray:
         """Smoothed ``values`` of shape ``(..., k)`` (the last axis over the vertices)."""
@@ -114,7 +137,12 @@ class SurfaceSmoother:
         if not np.isfinite(sub).all():
             raise ValueError("values: contain NaN or infinite values on the smoothed vertices")
         columns = sub.reshape(-1, sub.shape[-1]).T
-        smoothed = expm_multiply(self._generator, columns) if columns.size else columns
+        if not columns.size:
+            smoothed = columns
+        elif self._kernel is not None:
+            smoothed = self._kernel @ columns
+        else:
+            smoothed = expm_multiply(self._generator, columns)
         out = x.copy()
         out[..., self.vertices_smoothed] = smoothed.T.reshape(sub.shape)
         return out
