@@ -190,10 +190,16 @@ def _peak_effect(motion: CycleMotion, c, fwhm=None) -> tuple[float, float]:
     ``fwhm``, of the maps smoothed first."""
     peaks = curve_peaks(motion.curves(fwhm=fwhm))[0][:, c.data.region.affected]
     labels = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
-    a, b = peaks[labels], peaks[~labels]
-    difference = a.mean(axis=0) - b.mean(axis=0)
-    pooled = np.sqrt((a.var(axis=0, ddof=1) + b.var(axis=0, ddof=1)) / 2)
+    difference, pooled = group_difference(peaks, labels)
     return float(difference.mean()), float((difference / pooled).mean())
+
+
+def group_difference(values, labels) -> tuple[np.ndarray, np.ndarray]:
+    """Per column of ``values`` ``(n, k)``: the first group's mean minus the second's, and
+    the pooled within-group SD."""
+    a, b = values[labels], values[~labels]
+    pooled = np.sqrt((a.var(axis=0, ddof=1) + b.var(axis=0, ddof=1)) / 2)
+    return a.mean(axis=0) - b.mean(axis=0), pooled
 
 
 def _fingerprint(folder: Path) -> str:

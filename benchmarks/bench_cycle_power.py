@@ -73,10 +73,8 @@ def _motions(routes_work: Path | None, cine_work: Path | None, n: int, n_frames:
 
 
 def _region_effect(peaks, labels, region, band) -> tuple[float, float, float, float]:
-    a, b = peaks[labels][:, region], peaks[~labels][:, region]
-    difference = a.mean(axis=0) - b.mean(axis=0)
-    pooled = np.sqrt((a.var(axis=0, ddof=1) + b.var(axis=0, ddof=1)) / 2)
-    outside = peaks[labels][:, band].mean(axis=0) - peaks[~labels][:, band].mean(axis=0)
+    difference, pooled = cine.group_difference(peaks[:, region], labels)
+    outside = cine.group_difference(peaks[:, band], labels)[0]
     return (float(difference.mean()), float(pooled.mean()), float((difference / pooled).mean()),
             float(outside.mean()))  # fmt: skip
 

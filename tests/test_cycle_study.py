@@ -130,9 +130,7 @@ def test_the_cycle_tests_find_the_planted_region_and_nothing_under_the_null(tmp_
     assert tests.peak.statistic[found].max() < 0  # patients move less inward: lower peak
     frames_found = (tests.per_frame.p_fwer < 0.05).any(axis=1)
     assert not frames_found[0] and frames_found[ES_FRAME * 12 // N_FRAMES]
-    controls = np.flatnonzero(~c.patients)
-    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
-                       motion.atlas, motion.faces)  # fmt: skip
+    controls, null = _controls_only(c, motion)
     null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000, rng)
     assert (null_tests.peak.p_fwer < 0.05).sum() <= 0.01 * len(region)
     paths = write_cycle_tests(tmp_path, motion, tests, ("patients", "controls"))
@@ -142,25 +140,38 @@ def test_the_cycle_tests_find_the_planted_region_and_nothing_under_the_null(tmp_
     assert int(rows[int(np.argmin(tests.peak.p_fwer))]["vertex"]) >= 0
 
 
-def test_tfce_on_the_peak_keeps_a_region_that_vertex_noise_hides():
-    """A fixed per-subject, per-vertex error (as a tracked point's) added to every frame:
-    the peak's ``t`` is the same as the max-t test's, and TFCE finds more of the planted
-    region than the maximum statistic, with as few false vertices; nothing under the null."""
+def _controls_only(c, motion):
+    """The indices of the controls and their motion alone (a cohort under the null)."""
+    controls = np.flatnonzero(~c.patients)
+    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
+                       motion.atlas, motion.faces)  # fmt: skip
+    return controls, null
+
+
+def _noisy_cycles():
+    """24 subjects whose every frame but ED carries a fixed per-subject, per-vertex error
+    of 1.5 mm RMS (as a tracked point's): the cohort and the noisy motion."""
     c = make_two_group_cycles(n_subjects=24, n_frames=12, n_vertices=300, seed=4)
     d = c.frames - c.frames[:, :1]
     rng = np.random.default_rng(1)
     error = rng.normal(size=(d.shape[0], 1, d.shape[2], 3)) * 1.5 / np.sqrt(3)
     motion = CycleMotion(c.names, d + error * (np.arange(d.shape[1]) > 0)[None, :, None, None],
                          c.data.cohort.atlas, c.faces)  # fmt: skip
+    return c, motion
+
+
+def test_tfce_on_the_peak_keeps_a_region_that_vertex_noise_hides():
+    """A fixed per-subject, per-vertex error (as a tracked point's) added to every frame:
+    the peak's ``t`` is the same as the max-t test's, and TFCE finds more of the planted
+    region than the maximum statistic, with as few false vertices; nothing under the null."""
+    c, motion = _noisy_cycles()
     tests = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True)
     np.testing.assert_allclose(tests.peak_tfce.statistic, tests.peak.statistic, rtol=1e-7)
     region = c.data.region.weight > 0
     max_t, enhanced = tests.peak.p_fwer < 0.05, tests.peak_tfce.p_fwer_enhanced < 0.05
     assert enhanced[region].mean() >= max_t[region].mean() + 0.05
     assert (enhanced & ~region).sum() <= 0.02 * len(region)
-    controls = np.flatnonzero(~c.patients)
-    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
-                       motion.atlas, motion.faces)  # fmt: skip
+    controls, null = _controls_only(c, motion)
     null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000,
                                 np.random.default_rng(2), tfce=True)  # fmt: skip
     assert (null_tests.peak_tfce.p_fwer_enhanced < 0.05).sum() <= 0.01 * len(region)
@@ -175,12 +186,7 @@ def test_smoothing_the_maps_finds_a_region_that_vertex_noise_hides():
     ones; the rotation is smoothed off the axis only."""
     from ladders.statistics import SurfaceSmoother
 
-    c = make_two_group_cycles(n_subjects=24, n_frames=12, n_vertices=300, seed=4)
-    d = c.frames - c.frames[:, :1]
-    rng = np.random.default_rng(1)
-    error = rng.normal(size=(d.shape[0], 1, d.shape[2], 3)) * 1.5 / np.sqrt(3)
-    motion = CycleMotion(c.names, d + error * (np.arange(d.shape[1]) > 0)[None, :, None, None],
-                         c.data.cohort.atlas, c.faces)  # fmt: skip
+    c, motion = _noisy_cycles()
     raw = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0))
     smooth = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), fwhm=10.0)
     assert raw.fwhm is None and smooth.fwhm == 10.0
@@ -192,9 +198,7 @@ def test_smoothing_the_maps_finds_a_region_that_vertex_noise_hides():
           f"smoothed; outside {(found_raw & ~region).sum()}, {(found & ~region).sum()}")  # fmt: skip
     assert found[region].mean() >= found_raw[region].mean() + 0.1
     assert (found & ~region).sum() <= 0.03 * len(region)
-    controls = np.flatnonzero(~c.patients)
-    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
-                       motion.atlas, motion.faces)  # fmt: skip
+    controls, null = _controls_only(c, motion)
     null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000,
                                 np.random.default_rng(2), fwhm=10.0)  # fmt: skip
     assert (null_tests.peak.p_fwer < 0.05).sum() <= 0.01 * len(region)
@@ -276,9 +280,7 @@ def test_the_rotation_finds_a_planted_twist_that_the_normal_motion_does_not_see(
     assert (np.sign(tests.peaks[:, found]) == sign).mean() > 0.9
     normal = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0))
     assert (normal.peak.p_fwer < 0.05)[region].mean() <= 0.1
-    controls = np.flatnonzero(~c.patients)
-    null = CycleMotion(tuple(c.names[i] for i in controls), motion.displacement[controls],
-                       motion.atlas, motion.faces)  # fmt: skip
+    controls, null = _controls_only(c, motion)
     rng, hits = np.random.default_rng(5), 0
     for _ in range(40):  # the null FWER over random splits of the controls
         split = np.isin(np.arange(len(controls)), rng.permutation(len(controls))[:6])

@@ -43,6 +43,7 @@ wall, do not (``docs/tracking.md``).
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -127,7 +128,22 @@ class CycleMotion:
         if fwhm is None:
             return curves
         finite = np.isfinite(curves).all(axis=(0, 1))
-        return SurfaceSmoother(self.atlas, self.faces, fwhm, mask=finite)(curves)
+        return _smoother(self.atlas, self.faces, fwhm, finite)(curves)
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_smoother(atlas: bytes, faces: bytes, fwhm: float, mask: bytes) -> SurfaceSmoother:
+    return SurfaceSmoother(np.frombuffer(atlas).reshape(-1, 3),
+                           np.frombuffer(faces, dtype=np.int64).reshape(-1, 3), fwhm,
+                           mask=np.frombuffer(mask, dtype=bool))  # fmt: skip
+
+
+def _smoother(atlas, faces, fwhm: float, mask) -> SurfaceSmoother:
+    """The atlas's smoother, built once for the calls on the same atlas, width and mask
+    (a permutation null over random splits smooths every split on the same atlas)."""
+    return _cached_smoother(np.asarray(atlas, dtype=np.float64).tobytes(),
+                            np.asarray(faces, dtype=np.int64).tobytes(), float(fwhm),
+                            np.asarray(mask, dtype=bool).tobytes())  # fmt: skip
 
 
 def _axis_points(axis) -> np.ndarray:
@@ -366,10 +382,7 @@ def compare_cycles(
     labels = np.asarray(groups, dtype=bool)
     if labels.shape != (len(motion.subjects),):
         raise ValueError(f"groups: expected {len(motion.subjects)} labels, got {labels.shape}")
-    if fwhm is not None:
-        fwhm = float(fwhm)
-        if not np.isfinite(fwhm) or fwhm <= 0:
-            raise ValueError(f"fwhm: expected a width > 0 mm, got {fwhm}")
+    fwhm = None if fwhm is None else float(fwhm)  # checked by the smoother
     curves = motion.curves(measure, axis, min_radius, fwhm)
     n, n_frames, k = curves.shape
     tested = _tested(vertices, k)
