@@ -51,6 +51,12 @@ print(f"{len(f)} faces, backend {sys.argv[1]}: {dt:.1f} s, peak RSS {peak:.0f} M
 ROWS: list = []
 
 
+def _alignment_method(record: dict) -> str:
+    """How a subject was aligned: the record's ``alignment`` is a dict with its ``method``."""
+    alignment = record.get("alignment", "-")
+    return str(alignment.get("method", "-")) if isinstance(alignment, dict) else str(alignment)
+
+
 def single_registration() -> None:
     from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
     from ladders.study.preparation import CorrespondenceSettings, correspond_mesh, remesh
@@ -166,7 +172,7 @@ def compare_with_truth(cohort, motions, out, tmp: Path, jobs: int) -> None:
     spreads = [r.get("axial_spread_deg") for r in records if r.get("axial_spread_deg") is not None]
     TRUTH_ROWS.append(
         f"| correspondence, {len(records)} subjects | {len(out.failed)} failed; alignment by "
-        f"{', '.join(sorted({str(r.get('alignment', '-')) for r in records}))}"
+        f"{', '.join(sorted({_alignment_method(r) for r in records}))}"
         + (f"; axial spread median {np.median(spreads):.0f} deg" if spreads else "")
         + " |"
     )

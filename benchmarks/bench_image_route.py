@@ -22,6 +22,11 @@ RV label and corresponded). Per subject, against the generator's truth:
 * both: the lid removed by its normals and the true landmark table (cached in ``WORK``);
 * the ED vertex error against the correspondence's regularisation weight alpha^2, on
   the image meshes and on the true surfaces (cached in ``WORK``);
+* the same against the landmarks' anchoring of the affine fit: none, the apex's and
+  base-plane centre's heights along the long axis (the default), the whole points;
+* the RV route's base-plane centre against the true one, along the long axis and
+  aside of it (the landmark table's base is the model's axis point; the RV route's,
+  the centre of the meshed rim's section, on the valve plane);
 * per subject, the ED vertex error of each column minus the same subject's on its true
   surface (remeshed, with the landmark table: the orientation benchmark's row);
 * the septal direction from the RV label measured about the true long axis (the
@@ -178,35 +183,84 @@ def _rim_gap(data, poses, folder: Path) -> np.ndarray:
 def _harmonic_floor(n: int) -> list[tuple[str, np.ndarray]]:
     """ED vertex errors of the correspondence on true surfaces, with and without harmonics."""
     out = []
-    for label, model in (("default model", None),
-                         ("no wall harmonics", SyntheticLVModel(harmonic_amplitude=0.0))):  # fmt: skip
+    for label, model, marks in (
+        ("default model", None, False),
+        ("default model, landmark table (apex and base anchor the affine fit)", None, True),
+        ("no wall harmonics", SyntheticLVModel(harmonic_amplitude=0.0), False),
+    ):
         data = make_two_group_cohort(n_subjects=n, seed=3, model=model)
         faces, errors = data.cohort.faces, []
+        atlas_marks = synthetic_landmarks(data.cohort.atlas) if marks else None
         for s in data.cohort.subjects:
             v, f = remesh(s.ed, faces, len(faces))
             done = correspond_mesh(data.cohort.atlas, faces, v, f,
-                                   CorrespondenceSettings(alignment="none"))  # fmt: skip
+                                   CorrespondenceSettings(alignment="none"),
+                                   landmarks=synthetic_landmarks(s.ed) if marks else None,
+                                   template_landmarks=atlas_marks)  # fmt: skip
             errors.append(np.linalg.norm(done.vertices - s.ed, axis=1).mean())
         out.append((label, np.array(errors)))
         print(label, _cell(errors), flush=True)
     return out
 
 
+#: The landmarks' anchoring of the affine fit compared in the third table.
+ANCHORS = (("none", {"anchor_weight": 0.0}), ("axial (default)", {}),
+           ("whole points", {"anchor": "points"}))  # fmt: skip
+
+
+def _anchoring(data, poses, work: Path, jobs: int) -> list[str]:
+    """Rows of the ED vertex error against the landmarks' anchoring (cached in WORK)."""
+    lines = []
+    for label, src, done in _SOURCES:
+        cells = []
+        for name, change in ANCHORS:
+            out = work / "corresponded" / done
+            if change:
+                out = out.with_name(f"{done}_anchor_{name.split()[0]}")
+                if not (out / "quality.csv").is_file():
+                    correspond_cohort(work / "segmentations" / "posed" / "atlas.vtk", work / src,
+                                      out, CorrespondenceSettings(**change), jobs=jobs)  # fmt: skip
+            e = _errors(data, poses, out)
+            cells.append(f"{_cell(e[:, 0])}; {np.median(e[:, 4]):.2f}")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        print(lines[-1], flush=True)
+    return lines
+
+
+def _base_landmark(data, poses, work: Path) -> tuple[np.ndarray, ...]:
+    """Per subject: the RV route's base-plane centre against the true one, along the true long
+    axis (positive toward the base) and aside of it; and the centre of the section the true
+    mesh's own rim encloses, aside of the true one (mm)."""
+    from ladders.study.imaging.septum import _rim_centre
+
+    table = read_landmarks(work / "images_meshed" / "landmarks.csv")
+    along, aside, own = [], [], []
+    for s in data.cohort.subjects:
+        true = synthetic_landmarks(s.ed).transformed(poses[s.name])
+        d = table[s.name].base - true.base
+        along.append(d @ true.long_axis)
+        aside.append(np.linalg.norm(d - (d @ true.long_axis) * true.long_axis))
+        e = _rim_centre(s.ed, data.cohort.faces) - synthetic_landmarks(s.ed).base
+        own.append(np.linalg.norm(e[:2]))
+    return np.array(along), np.array(aside), np.array(own)
+
+
 #: The correspondence's alpha^2 (regularisation weight) of the second table.
 ALPHA2 = (0.1, 1.0, 10.0, 100.0)
+#: (row label, folder of meshes, folder of the default correspondence) of the sweeps.
+_SOURCES = (
+    ("label images, RV landmarks", "images_meshed", IMAGES),
+    ("label images, true landmark table", "images_meshed_true_landmarks",
+     "label_images_true_landmarks"),
+    ("true surfaces remeshed, landmark table", "segmentations/posed", TRUE_SURFACES),
+)  # fmt: skip
 
 
 def _regularisation(data, poses, work: Path, jobs: int) -> list[str]:
     """Rows of the ED vertex error against alpha^2 (each correspondence cached in WORK)."""
     default = CorrespondenceSettings()
-    sources = (
-        ("label images, RV landmarks", "images_meshed", IMAGES),
-        ("label images, true landmark table", "images_meshed_true_landmarks",
-         "label_images_true_landmarks"),
-        ("true surfaces remeshed, landmark table", "segmentations/posed", TRUE_SURFACES),
-    )  # fmt: skip
     lines = []
-    for label, src, done in sources:
+    for label, src, done in _SOURCES:
         cells = []
         for alpha2 in ALPHA2:
             out = work / "corresponded" / done
@@ -271,6 +325,7 @@ def main(argv=None) -> None:
         true = synthetic_landmarks(s.ed).transformed(poses[s.name]).septal_direction
         cosine = np.clip(lid_meshed[s.name].septal_direction @ true, -1.0, 1.0)
         lid_septum.append(np.degrees(np.arccos(cosine)))
+    base_along, base_aside, base_own = _base_landmark(data, poses, args.work)
     gap = _rim_gap(data, poses, args.work / "images_meshed")
     lid_gap = _rim_gap(data, poses, lid_meshes)
     cols = (rv, exact, lid, lid_exact)
@@ -294,6 +349,11 @@ def main(argv=None) -> None:
         f"{_cell(lid_septum)} | 0 |",
         f"| the same, the RV's centroid taken about the true long axis (deg) | "
         f"{_cell(about_true_axis)} | - | - | - |",
+        f"| base-plane centre from the RV route: its distance to the true valve plane; its "
+        f"distance aside of the true long axis (mm) | {_cell(np.abs(base_along))}; "
+        f"{_cell(base_aside)} | 0; 0 | - | 0; 0 |",
+        f"| the true mesh's own rim: the centre of the section it encloses, aside of the "
+        f"model's axis point (mm) | {_cell(base_own)} | - | - | - |",
         row("rotation left (deg)", 3),
         row("ED vertex error to the true material points (mm)", 0),
         "| the same minus that on the subject's true surface (remeshed, landmark table): "
@@ -316,13 +376,27 @@ def main(argv=None) -> None:
         "|---|" + "---|" * len(ALPHA2),
         *regularisation,
     ]
+    anchoring = _anchoring(data, poses, args.work, args.jobs)
+    lines += [
+        "",
+        "The landmarks' anchoring of the affine fit (`CorrespondenceSettings(anchor=..., "
+        "anchor_weight=...)`): none (`anchor_weight=0`), the apex's and base-plane centre's "
+        "heights along the long axis (the default), or the whole points. Each cell: ED vertex "
+        "error to the true material points, median / max over the subjects; then the basal "
+        "fifth's mean error along the long axis, median (mm).",
+        "",
+        "| ED meshes | " + " | ".join(name for name, _ in ANCHORS) + " |",
+        "|---|" + "---|" * len(ANCHORS),
+        *anchoring,
+    ]
     floor = _harmonic_floor(args.subjects)
     lines += [
         "",
         "The floor set by the wall's harmonics: the same subjects' true ED surfaces, unposed "
         "and remeshed, corresponded with the default settings and no rigid alignment "
-        "(`alignment='none'`), with the default model and with its azimuthal harmonics "
-        "set to zero (`SyntheticLVModel(harmonic_amplitude=0)`).",
+        "(`alignment='none'`): with the default model, with it and the true landmark table "
+        "(its apex and base anchor the affine fit), and with its azimuthal harmonics set to "
+        "zero (`SyntheticLVModel(harmonic_amplitude=0)`).",
         "",
         "| true ED surfaces, unposed, remeshed | ED vertex error to the true material points, "
         "median / max (mm) |",

@@ -82,17 +82,21 @@ def test_the_flags_reach_the_library(tmp_path, monkeypatch):
         "correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes", tmp_path / "seg",
         "-o", tmp_path / "out", "--units", "m", "--allow-scale", "--allow-pose", "--alignment",
         "none", "--sigma-w", "7", "--weight", "0.5", "--no-resume", "-j", "2", "--no-progress",
+        "--landmark-anchor", "points",
     )  # fmt: skip
     assert status == 0 and "0 corresponded, 0 reused, 0 failed" in out
     assert list(seen["meshes"]) == ["synthetic_000"]
     s = seen.pop("settings")
-    assert (s.sigma_w, s.weight, s.alignment) == (7.0, 0.5, "none")
+    assert (s.sigma_w, s.weight, s.alignment, s.anchor) == (7.0, 0.5, "none", "points")
     assert seen["units"] == "m" and seen["allow_scale"] and seen["allow_pose"] is True
     assert seen["resume"] is False and seen["jobs"] == 2 and seen["progress"] is None
     status, _, _ = run_cli("correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes",
                            tmp_path / "seg", "-o", tmp_path / "out")  # fmt: skip
     assert seen["allow_pose"] is None and seen["resume"] is True and seen["units"] is None
     assert seen["settings"] == preparation.CorrespondenceSettings()  # the library's defaults
+    run_cli("correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes", tmp_path / "seg",
+            "-o", tmp_path / "out", "--landmark-anchor", "none")  # fmt: skip
+    assert seen["settings"].anchor_weight == 0.0
 
 
 # ------------------------------------------------------------------ atlas

@@ -23,6 +23,7 @@ from ladders.study.imaging import (
 from ladders.study.imaging.rv_label import add_rv_label, voxel_centres
 from ladders.study.imaging.septum import label_centroid, landmarks_from_labels, lv_apex_and_base
 from ladders.study.imaging.surface_extraction import _shifted_plane
+from ladders.study.meshes import read_mesh
 from ladders.study.preparation.landmarks import axial_angle, check_landmarks, read_landmarks
 from ladders.study.volume import boundary_vertices
 
@@ -266,6 +267,13 @@ def test_the_cli_writes_the_landmark_table(meshed):
         posed = truth[name, "ed"]
         assert _angle(lm.septal_direction, _orthogonal(posed.septum, lm.long_axis)) < 5.0
         assert _angle(lm.long_axis, posed.base - posed.apex) < 5.0
+        # the base-plane centre lies on the valve plane given, not on the plane the cut's
+        # margin moved half a voxel below it, where the mesh's rim is
+        point, normal = np.array(posed.plane[:3]), np.array(posed.plane[3:])
+        normal /= np.linalg.norm(normal)
+        assert abs((lm.base - point) @ normal) < 1e-6
+        mesh_v, mesh_f = read_mesh(root / "meshes" / f"{name}_ed.vtk")
+        assert ((mesh_v[boundary_vertices(mesh_f)] - point) @ normal).mean() < -1.0
         record = json.loads((root / "meshes" / f"{name}_ed.json").read_text())
         assert record["rv_label"] == 2
         np.testing.assert_allclose(record["landmarks"]["septum"], lm.septum, atol=1e-8)

@@ -88,6 +88,14 @@ def add_correspond_parser(sub) -> None:
     )
     add_landmark_arguments(p, atlas_landmarks=True)
     p.add_argument(
+        "--landmark-anchor",
+        choices=("axial", "points", "none"),
+        default="axial",
+        help="with landmarks, what the apex and base-plane centre fix in the affine fit onto "
+        "each mesh: their heights along the long axis (the stretch a wall cut at its base "
+        "leaves loose), the whole points, or nothing",
+    )
+    p.add_argument(
         "--es-correspondence",
         choices=("normal", "registration"),
         default="normal",
@@ -169,8 +177,9 @@ def run_correspond_command(args) -> int:
 
     n_vertices = _check_atlas(args.atlas)
     entries = _scan(args.meshes)
+    anchor = {"none": {"anchor_weight": 0.0}}.get(args.landmark_anchor, {"anchor": args.landmark_anchor})  # fmt: skip
     settings = correspondence_settings(
-        args, alignment=args.alignment, es_correspondence=args.es_correspondence
+        args, alignment=args.alignment, es_correspondence=args.es_correspondence, **anchor
     )
     landmarks = landmarks_argument(args, args.meshes)
     output = Path(args.output)

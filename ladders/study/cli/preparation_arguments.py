@@ -155,7 +155,7 @@ def add_landmark_arguments(p, atlas_landmarks: bool = False) -> None:
         default=None,
         help="landmark table (subject, apex_x..z, base_x..z, septum_x..z; row 'atlas' for the "
         "atlas), in the mesh files' coordinates: fixes each subject's turn about the long axis, "
-        "which a surface fit leaves open (default: landmarks.csv of --meshes when present, as "
+        "which a surface fit leaves open, and anchors the stretch along it (default: landmarks.csv of --meshes when present, as "
         "'symladders mesh --rv-label' writes it)",
     )
     p.add_argument("--no-landmarks", action="store_true", help="ignore landmarks.csv of --meshes")

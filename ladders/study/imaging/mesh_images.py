@@ -47,7 +47,7 @@ from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, Landmarks, write_landmarks
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
 from .septum import landmarks_from_labels
-from .surface_extraction import MeshingSettings, _shifted_plane, extract_surface
+from .surface_extraction import MeshingSettings, extract_surface
 
 __all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images", "REPORT_FILE"]
 
@@ -269,8 +269,10 @@ def _mesh_one(
         vertices, faces, report = extract_surface(image, label, settings)
         landmarks = None
         if rv_label is not None:  # before writing: an image without landmarks gives no mesh
-            plane = None if settings.cut_plane is None else _shifted_plane(settings, image.affine)
-            landmarks = landmarks_from_labels(vertices, faces, image, rv_label, cut_plane=plane)
+            # the base-plane centre on the valve plane itself, not on the plane moved by the
+            # cut's margin: the landmark is anatomical, the margin only removes the lid
+            landmarks = landmarks_from_labels(vertices, faces, image, rv_label,
+                                              cut_plane=settings.cut_plane)  # fmt: skip
         write_mesh(out, vertices, faces, atomic=True)
         record = {
             "source": str(task.source.resolve()), "sha256": sha, "label": label,

@@ -111,6 +111,16 @@ class CorrespondenceSettings:
     prealign : {"affine", "none"}
         Move the template by the affine fit onto the mesh (:mod:`.affine`) before
         the registration, so that the deformation does not slide its vertices.
+    anchor : {"axial", "points"}
+        With landmarks, the apex and the base-plane centre anchor that affine fit
+        (:func:`~.affine.affine_icp`): they set the stretch along the long axis, which a
+        near-tubular wall cut at its base leaves loose. ``"axial"``: their heights along
+        the subject's long axis only (the surfaces set the rest; an apex or a base
+        centre placed a millimetre or two aside, as a label image's are, does not pull
+        the fit sideways); ``"points"``: the whole points.
+    anchor_weight : float
+        Weight of each anchor, relative to the surface's point pairs; 0: the surfaces
+        alone.
     scale : bool
         Fit a similarity (with ``"icp"``) instead of a rigid motion.
     final_procrustes : bool
@@ -135,6 +145,8 @@ class CorrespondenceSettings:
     data_term: str = "varifold"
     alignment: str = "icp"
     prealign: str = "affine"
+    anchor: str = "axial"
+    anchor_weight: float = 0.1
     scale: bool = False
     final_procrustes: bool = True
     es_template: str = "ed"
@@ -156,6 +168,7 @@ class CorrespondenceSettings:
             check_float(
                 getattr(self, key), f"{name}: {key}", minimum=minimum, strict=key != "alpha"
             )
+        check_float(self.anchor_weight, f"{name}: anchor_weight", minimum=0.0)
         for key in ("flag_hausdorff", "landmark_tolerance", "flag_axial_spread",
                     "flag_landmark_disagreement"):  # fmt: skip
             check_float(getattr(self, key), f"{name}: {key}", minimum=0.0, strict=True)
@@ -170,6 +183,7 @@ class CorrespondenceSettings:
             ("prealign", ("affine", "none")),
             ("es_template", ("ed", "atlas")),
             ("es_correspondence", ("normal", "registration")),
+            ("anchor", ("axial", "points")),
         ):
             if getattr(self, key) not in choices:
                 raise ValueError(f"{name}: {key}: expected one of {choices}, got {getattr(self, key)!r}")  # fmt: skip
@@ -264,7 +278,8 @@ def correspond_mesh(
         ``(vertices, faces)`` of the surface to align onto.
     landmarks, template_landmarks : Landmarks, optional
         Both or neither: the mesh's landmarks (in its own frame) and those of the
-        surface aligned onto; they fix the turn about the long axis.
+        surface aligned onto; they fix the turn about the long axis, and their apex
+        and base-plane centre anchor the affine fit (``settings.anchor_weight``).
 
     Returns
     -------
@@ -284,7 +299,16 @@ def correspond_mesh(
                             target_landmarks=template_landmarks)  # fmt: skip
             transform = fit.transform
     moved = transform.apply(mv)
-    affine = affine_icp(tv, tf, moved, mf) if settings.prealign == "affine" else np.eye(4)
+    anchors = None
+    if landmarks is not None and template_landmarks is not None:
+        anchors = (np.array([template_landmarks.apex, template_landmarks.base]),
+                   transform.apply(np.array([landmarks.apex, landmarks.base])))  # fmt: skip
+    direction = None
+    if anchors is not None and settings.anchor == "axial":
+        direction = anchors[1][1] - anchors[1][0]
+    affine = (affine_icp(tv, tf, moved, mf, anchors=anchors, anchor_weight=settings.anchor_weight,
+                         anchor_direction=direction) if settings.prealign == "affine"
+              else np.eye(4))  # fmt: skip
     term = settings.data_term_for(moved, mf, tf)
     start = apply_affine(affine, tv)
     res = register(start, term, settings.alpha, settings.registration, warn=False)
