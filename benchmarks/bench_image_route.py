@@ -208,25 +208,6 @@ ANCHORS = (("none", {"anchor_weight": 0.0}), ("axial (default)", {}),
            ("whole points", {"anchor": "points"}))  # fmt: skip
 
 
-def _anchoring(data, poses, work: Path, jobs: int) -> list[str]:
-    """Rows of the ED vertex error against the landmarks' anchoring (cached in WORK)."""
-    lines = []
-    for label, src, done in _SOURCES:
-        cells = []
-        for name, change in ANCHORS:
-            out = work / "corresponded" / done
-            if change:
-                out = out.with_name(f"{done}_anchor_{name.split()[0]}")
-                if not (out / "quality.csv").is_file():
-                    correspond_cohort(work / "segmentations" / "posed" / "atlas.vtk", work / src,
-                                      out, CorrespondenceSettings(**change), jobs=jobs)  # fmt: skip
-            e = _errors(data, poses, out)
-            cells.append(f"{_cell(e[:, 0])}; {np.median(e[:, 4]):.2f}")
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
-        print(lines[-1], flush=True)
-    return lines
-
-
 def _base_landmark(data, poses, work: Path) -> tuple[np.ndarray, ...]:
     """Per subject: the RV route's base-plane centre against the true one, along the true long
     axis (positive toward the base) and aside of it; and the centre of the section the true
@@ -256,25 +237,32 @@ _SOURCES = (
 )  # fmt: skip
 
 
-def _regularisation(data, poses, work: Path, jobs: int) -> list[str]:
-    """Rows of the ED vertex error against alpha^2 (each correspondence cached in WORK)."""
-    default = CorrespondenceSettings()
+def _sweep(data, poses, work: Path, jobs: int, variants, column: int) -> list[str]:
+    """Rows of the ED vertex error, one per source of ``_SOURCES``, one cell per variant
+    ``(folder suffix or None for the default, settings changes)``; each cell: median / max
+    of the error, then the median of ``_errors``' column ``column`` (each correspondence
+    cached in WORK)."""
     lines = []
     for label, src, done in _SOURCES:
         cells = []
-        for alpha2 in ALPHA2:
+        for suffix, changes in variants:
             out = work / "corresponded" / done
-            if not np.isclose(alpha2, default.alpha**2):
-                out = out.with_name(f"{done}_alpha2_{alpha2:g}")
+            if suffix is not None:
+                out = out.with_name(f"{done}_{suffix}")
                 if not (out / "quality.csv").is_file():
-                    settings = default.replace(alpha=float(np.sqrt(alpha2)))
                     correspond_cohort(work / "segmentations" / "posed" / "atlas.vtk", work / src,
-                                      out, settings, jobs=jobs)  # fmt: skip
+                                      out, CorrespondenceSettings(**changes), jobs=jobs)  # fmt: skip
             e = _errors(data, poses, out)
-            cells.append(f"{_cell(e[:, 0])}; {np.median(e[:, 1]):.2f}")
+            cells.append(f"{_cell(e[:, 0])}; {np.median(e[:, column]):.2f}")
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
         print(lines[-1], flush=True)
     return lines
+
+
+def _sweep_table(caption: str, names, rows) -> list[str]:
+    """A sweep's caption and table (its first column: the ED meshes)."""
+    return ["", caption, "", "| ED meshes | " + " | ".join(names) + " |",
+            "|---|" + "---|" * len(names), *rows]  # fmt: skip
 
 
 def _cell(values) -> str:
@@ -364,31 +352,28 @@ def main(argv=None) -> None:
         row("error about the long axis: its mean, a turn (mm)", 5),
         row("error about the long axis: mean deviation from that turn (mm)", 6),
     ]
-    regularisation = _regularisation(data, poses, args.work, args.jobs)
-    lines += [
-        "",
+    default = CorrespondenceSettings()
+    alphas = [(None if np.isclose(a, default.alpha**2) else f"alpha2_{a:g}",
+               {"alpha": float(np.sqrt(a))}) for a in ALPHA2]  # fmt: skip
+    lines += _sweep_table(
         "The correspondence's regularisation: the same 20 subjects corresponded with "
         "`CorrespondenceSettings(alpha=sqrt(alpha^2))` (the default is alpha^2 = 0.1). Each "
         "cell: ED vertex error to the true material points, median / max over the subjects; "
         "then its part along the true normals, median (mm).",
-        "",
-        "| ED meshes | " + " | ".join(f"alpha^2 = {a:g}" for a in ALPHA2) + " |",
-        "|---|" + "---|" * len(ALPHA2),
-        *regularisation,
-    ]
-    anchoring = _anchoring(data, poses, args.work, args.jobs)
-    lines += [
-        "",
+        [f"alpha^2 = {a:g}" for a in ALPHA2],
+        _sweep(data, poses, args.work, args.jobs, alphas, 1),
+    )
+    anchors = [(None if not change else f"anchor_{name.split()[0]}", change)
+               for name, change in ANCHORS]  # fmt: skip
+    lines += _sweep_table(
         "The landmarks' anchoring of the affine fit (`CorrespondenceSettings(anchor=..., "
         "anchor_weight=...)`): none (`anchor_weight=0`), the apex's and base-plane centre's "
         "heights along the long axis (the default), or the whole points. Each cell: ED vertex "
         "error to the true material points, median / max over the subjects; then the basal "
         "fifth's mean error along the long axis, median (mm).",
-        "",
-        "| ED meshes | " + " | ".join(name for name, _ in ANCHORS) + " |",
-        "|---|" + "---|" * len(ANCHORS),
-        *anchoring,
-    ]
+        [name for name, _ in ANCHORS],
+        _sweep(data, poses, args.work, args.jobs, anchors, 4),
+    )
     floor = _harmonic_floor(args.subjects)
     lines += [
         "",

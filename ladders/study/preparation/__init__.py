@@ -9,7 +9,8 @@
   or follows anatomical landmarks (:mod:`.landmarks`: :class:`Landmarks`, the table); :mod:`.affine`: the affine
   pre-alignment of the atlas (:func:`affine_icp`);
 - :mod:`.correspondence`: :func:`correspond_mesh` and :func:`correspond_subject`,
-  the atlas registered onto a mesh of any triangulation with a varifold term;
+  the atlas registered onto a mesh of any triangulation with a varifold term, with
+  its settings in :mod:`.correspondence_settings` (:class:`CorrespondenceSettings`);
 - :mod:`.cohort_correspondence`: :func:`correspond_cohort`, a folder of
   segmentations into a folder the study reads, with a quality table
   (:mod:`.quality_table`), failures recorded and resume;
@@ -34,13 +35,13 @@ from .atlas_run import AtlasInterrupted, AtlasRun, build_atlas
 from .cohort_correspondence import CohortCorrespondence, correspond_cohort, scan_segmentations
 from .cohort_units import AtlasInputs, check_cohort_units, read_atlas_inputs
 from .correspondence import (
-    CorrespondenceSettings,
     MeshCorrespondence,
     SubjectCorrespondence,
     correspond_mesh,
     correspond_subject,
     project_mesh,
 )
+from .correspondence_settings import CorrespondenceSettings
 from .landmarks import (
     LANDMARKS_FILE,
     LandmarkError,

@@ -30,7 +30,7 @@ from manifolds.lddmm import LDDMMLandmarks
 from manifolds.validation import check_float, check_int
 
 from .alignment import SimilarityTransform, procrustes
-from .correspondence import CorrespondenceSettings
+from .correspondence_settings import CorrespondenceSettings
 from .landmarks import Landmarks
 from .rigid_fit import fit_rigid
 

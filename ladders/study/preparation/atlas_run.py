@@ -26,7 +26,7 @@ from ..files import atomic_write_text, file_sha256
 from ..meshes import MESH_EXTENSIONS, read_mesh, write_mesh
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
 from .cohort_units import AtlasInputs, read_atlas_inputs
-from .correspondence import CorrespondenceSettings
+from .correspondence_settings import CorrespondenceSettings
 from .landmarks import (
     LANDMARKS_FILE,
     LandmarkError,

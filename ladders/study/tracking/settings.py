@@ -12,7 +12,7 @@ import numpy as np
 from manifolds.validation import check_float, check_int
 
 from ..imaging.surface_extraction import MeshingSettings
-from ..preparation.correspondence import CorrespondenceSettings
+from ..preparation.correspondence_settings import CorrespondenceSettings
 
 __all__ = ["TrackingSettings", "METHODS"]
 
