@@ -212,7 +212,7 @@ def _base_landmark(data, poses, work: Path) -> tuple[np.ndarray, ...]:
     """Per subject: the RV route's base-plane centre against the true one, along the true long
     axis (positive toward the base) and aside of it; and the centre of the section the true
     mesh's own rim encloses, aside of the true one (mm)."""
-    from ladders.study.imaging.septum import _rim_centre
+    from ladders.study.imaging.septum import lv_apex_and_base
 
     table = read_landmarks(work / "images_meshed" / "landmarks.csv")
     along, aside, own = [], [], []
@@ -221,7 +221,8 @@ def _base_landmark(data, poses, work: Path) -> tuple[np.ndarray, ...]:
         d = table[s.name].base - true.base
         along.append(d @ true.long_axis)
         aside.append(np.linalg.norm(d - (d @ true.long_axis) * true.long_axis))
-        e = _rim_centre(s.ed, data.cohort.faces) - synthetic_landmarks(s.ed).base
+        rim = lv_apex_and_base(s.ed, data.cohort.faces)[1]  # an open mesh: its rim's section
+        e = rim - synthetic_landmarks(s.ed).base
         own.append(np.linalg.norm(e[:2]))
     return np.array(along), np.array(aside), np.array(own)
 

@@ -46,6 +46,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import expm_multiply
 
+from manifolds.validation import check_int
+
 __all__ = ["SurfaceSmoother", "fwhm_to_time", "smooth_surface_data"]
 
 
@@ -90,12 +92,7 @@ class SurfaceSmoother:
         fwhm = float(fwhm)
         if not np.isfinite(fwhm) or fwhm <= 0:
             raise ValueError(f"fwhm: expected a width > 0, got {fwhm}")
-        if (
-            isinstance(dense_max, bool)
-            or not isinstance(dense_max, (int, np.integer))
-            or (dense_max < 0)
-        ):
-            raise ValueError(f"dense_max: expected a vertex count >= 0, got {dense_max!r}")
+        dense_max = check_int(dense_max, "dense_max", minimum=0)
         k = len(v)
         if mask is None:
             mask = np.ones(k, dtype=bool)
