@@ -70,6 +70,7 @@ from ladders.study.preparation.synthetic_landmarks import synthetic_landmarks  #
 from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
 
 IMAGES = "label_images_(1.5_mm)_posed_up_to_30_degrees_RV_label"
+CENTROID = IMAGES + "_septum_toward_its_centroid"
 TRUE_SURFACES = "remeshed_posed_up_to_30_degrees_landmark_table"
 
 
@@ -124,6 +125,29 @@ def _true_landmarks(data, poses, work: Path, jobs: int, meshes: str = "images_me
         atlas = work / "segmentations" / "posed" / "atlas.vtk"
         correspond_cohort(atlas, src, out, CorrespondenceSettings(), jobs=jobs)
     return out
+
+
+def _meshing(data, poses, meshes: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Per subject: the mean distance of the meshed ED to the true surface, and its signed mean
+    (outward positive)."""
+    out = []
+    for s in data.cohort.subjects:
+        v, _ = read_mesh(meshes / f"{s.name}_ed.vtk")
+        d = _distance(poses[s.name].apply(s.ed), data.cohort.faces, v, signed=True)
+        out.append((np.abs(d).mean(), d.mean()))
+    return np.array(out).T
+
+
+def _septum_errors(data, poses, meshes: Path) -> np.ndarray:
+    """Per subject: the angle (degrees) of the septal direction of ``meshes``' landmark table
+    from the true one."""
+    table = read_landmarks(meshes / "landmarks.csv")
+    errors = []
+    for s in data.cohort.subjects:
+        true = synthetic_landmarks(s.ed).transformed(poses[s.name]).septal_direction
+        cosine = np.clip(table[s.name].septal_direction @ true, -1.0, 1.0)
+        errors.append(np.degrees(np.arccos(cosine)))
+    return np.array(errors)
 
 
 def _septum_about_the_true_axis(data, poses, work: Path) -> np.ndarray:
@@ -285,17 +309,11 @@ def main(argv=None) -> None:
     data = make_two_group_cohort(n_subjects=args.subjects, seed=3)
     truth = json.loads((args.work / "segmentations" / "posed" / "planted_region.json").read_text())
     poses = {n: SimilarityTransform.from_matrix(np.array(m)) for n, m in truth["poses"].items()}
-    meshed = read_landmarks(args.work / "images_meshed" / "landmarks.csv")
-    meshing, signed, septum = [], [], []
-    for s in data.cohort.subjects:
-        v, _ = read_mesh(args.work / "images_meshed" / f"{s.name}_ed.vtk")
-        d = _distance(poses[s.name].apply(s.ed), data.cohort.faces, v, signed=True)
-        meshing.append(np.abs(d).mean())
-        signed.append(d.mean())
-        true = synthetic_landmarks(s.ed).transformed(poses[s.name]).septal_direction
-        cosine = np.clip(meshed[s.name].septal_direction @ true, -1.0, 1.0)
-        septum.append(np.degrees(np.arccos(cosine)))
+    meshing, signed = _meshing(data, poses, args.work / "images_meshed")
+    septum = _septum_errors(data, poses, args.work / "images_meshed")
     rv = _errors(data, poses, args.work / "corresponded" / IMAGES)
+    centroid = _errors(data, poses, args.work / "corresponded" / CENTROID)
+    centroid_septum = _septum_errors(data, poses, args.work / "images_meshed_centroid")
     exact = _errors(data, poses, _true_landmarks(data, poses, args.work, args.jobs))
     lid_meshes, lid_out = _lid_route(data, poses, args.work, args.jobs)
     lid = _errors(data, poses, lid_out)
@@ -304,16 +322,8 @@ def main(argv=None) -> None:
                                                      "label_images_lid_true_landmarks"))  # fmt: skip
     about_true_axis = _septum_about_the_true_axis(data, poses, args.work)
     surfaces = _errors(data, poses, args.work / "corresponded" / TRUE_SURFACES)[:, 0]
-    lid_meshed = read_landmarks(lid_meshes / "landmarks.csv")
-    lid_meshing, lid_signed, lid_septum = [], [], []
-    for s in data.cohort.subjects:
-        v, _ = read_mesh(lid_meshes / f"{s.name}_ed.vtk")
-        d = _distance(poses[s.name].apply(s.ed), data.cohort.faces, v, signed=True)
-        lid_meshing.append(np.abs(d).mean())
-        lid_signed.append(d.mean())
-        true = synthetic_landmarks(s.ed).transformed(poses[s.name]).septal_direction
-        cosine = np.clip(lid_meshed[s.name].septal_direction @ true, -1.0, 1.0)
-        lid_septum.append(np.degrees(np.arccos(cosine)))
+    lid_meshing, lid_signed = _meshing(data, poses, lid_meshes)
+    lid_septum = _septum_errors(data, poses, lid_meshes)
     base_along, base_aside, base_own = _base_landmark(data, poses, args.work)
     gap = _rim_gap(data, poses, args.work / "images_meshed")
     lid_gap = _rim_gap(data, poses, lid_meshes)
@@ -336,6 +346,8 @@ def main(argv=None) -> None:
         "same meshes |",
         f"| septal direction from the RV label, error (deg) | {_cell(septum)} | 0 | "
         f"{_cell(lid_septum)} | 0 |",
+        f"| the same, toward the RV's centroid (`rv_septum='centroid'`) (deg) | "
+        f"{_cell(centroid_septum)} | - | - | - |",
         f"| the same, the RV's centroid taken about the true long axis (deg) | "
         f"{_cell(about_true_axis)} | - | - | - |",
         f"| base-plane centre from the RV route: its distance to the true valve plane; its "
@@ -345,6 +357,8 @@ def main(argv=None) -> None:
         f"model's axis point (mm) | {_cell(base_own)} | - | - | - |",
         row("rotation left (deg)", 3),
         row("ED vertex error to the true material points (mm)", 0),
+        f"| the same with the septum toward the RV's centroid (mm) | {_cell(centroid[:, 0])} | "
+        "- | - | - |",
         "| the same minus that on the subject's true surface (remeshed, landmark table): "
         "min / median / max (mm) | " + " | ".join(_spread(c[:, 0] - surfaces) for c in cols) + " |",
         row("its part along the true normals (mm)", 1),

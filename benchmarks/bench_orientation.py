@@ -26,10 +26,12 @@ Per condition and subject:
 * the same rotation left for the rigid alignment of ``estimate_atlas`` (every
   subject's end-diastole onto the first one's, by ``fit_rigid`` as the atlas does).
 
-The label-image route (``--images``): the posed subjects voxelised (1.5 mm voxels,
+The label-image route: the posed subjects voxelised (1.5 mm voxels,
 the cavity as label 1, a right ventricle beside the septum as label 2,
 :func:`~ladders.study.imaging.add_rv_label`), meshed by ``mesh_label_images`` with
-``rv_label=2`` (the landmark table from the RV) and corresponded with it.
+``rv_label=2`` (the landmark table from the RV) and corresponded with it: with the
+septal direction half way between the RV's insertion points (the default) and toward
+the RV's centroid (``rv_septum="centroid"``).
 """
 
 from __future__ import annotations
@@ -63,6 +65,12 @@ CONDITIONS = (
     ("remeshed, posed up to 30 degrees, no landmarks", True, False, "normal"),
     ("remeshed, posed up to 30 degrees, landmark table", True, True, "normal"),
     ("label images (1.5 mm), posed up to 30 degrees, RV label", True, "images", "normal"),
+    (
+        "label images (1.5 mm), posed up to 30 degrees, RV label, septum toward its centroid",
+        True,
+        "images_centroid",
+        "normal",
+    ),
 )
 
 
@@ -95,12 +103,15 @@ def run_condition(data, label, pose, landmarks, es, work: Path, jobs: int) -> di
         write_two_group_cohort(data, folder, remesh_factor=1.0, pose=pose, landmarks=True)
     if landmarks == "images":
         folder = write_label_images(data, work)
+    elif landmarks == "images_centroid":
+        folder = write_label_images(data, work, septum="centroid", meshes="images_meshed_centroid")
     truth = json.loads((folder / "planted_region.json").read_text())
     poses = {n: SimilarityTransform.from_matrix(np.array(m)) for n, m in truth["poses"].items()}
     out = work / "corresponded" / label.replace(" ", "_").replace(",", "")
     settings = CorrespondenceSettings(es_correspondence=es)
     start = time.perf_counter()
-    atlas = work / "segmentations" / "posed" / "atlas.vtk" if landmarks == "images" else None
+    images = landmarks in ("images", "images_centroid")
+    atlas = work / "segmentations" / "posed" / "atlas.vtk" if images else None
     result = correspond_cohort(atlas or folder / "atlas.vtk", folder, out, settings, jobs=jobs,
                                landmarks=None if landmarks else False)  # fmt: skip
     seconds = time.perf_counter() - start
@@ -147,17 +158,17 @@ def run_condition(data, label, pose, landmarks, es, work: Path, jobs: int) -> di
     }  # fmt: skip
 
 
-def write_label_images(data, work: Path, spacing: float = 1.5) -> Path:
-    """The posed segmentations' generating meshes as label images with an RV label; meshed."""
+def write_label_images(data, work: Path, spacing: float = 1.5, septum: str = "insertion",
+                       meshes: str = "images_meshed") -> Path:  # fmt: skip
+    """The posed segmentations' generating meshes as label images with an RV label, meshed
+    into ``WORK/meshes`` with the septal direction taken by ``septum``."""
     from ladders.study.imaging import add_rv_label, mesh_label_images, voxelize, write_label_image
     from ladders.study.preparation.landmarks import write_landmarks
     from ladders.study.preparation.synthetic_landmarks import synthetic_landmarks
 
     posed = work / "segmentations" / "posed"
     truth = json.loads((posed / "planted_region.json").read_text())
-    images, meshes = work / "images", work / "images_meshed"
-    if (meshes / "landmarks.csv").is_file():
-        return meshes
+    images, meshes = work / "images", work / meshes
     planes = {}
     for s in data.cohort.subjects:
         pose = SimilarityTransform.from_matrix(np.array(truth["poses"][s.name]))
@@ -168,15 +179,17 @@ def write_label_images(data, work: Path, spacing: float = 1.5) -> Path:
         affine = np.diag([spacing, spacing, spacing, 1.0])
         affine[:3, 3] = low
         for phase, v in (("ed", s.ed), ("es", s.es)):
-            world = pose.apply(v)
-            labels = voxelize(world, data.cohort.faces, affine, shape, label=1)
             top = pose.apply(np.array([[0.0, 0.0, v[:, 2].max()]]))[0]
-            labels = add_rv_label(labels, affine, lm.apex, top, lm.septum - lm.apex)
             name = f"{s.name}_{phase}.nii.gz"
-            write_label_image(images / name, labels, affine)
             planes[name] = (*top, *(pose.rotation @ [0.0, 0.0, 1.0]))
+            if (images / name).is_file():  # written by an earlier run
+                continue
+            labels = voxelize(pose.apply(v), data.cohort.faces, affine, shape, label=1)
+            labels = add_rv_label(labels, affine, lm.apex, top, lm.septum - lm.apex)
+            write_label_image(images / name, labels, affine)
+    # meshes made before with the same settings are reused (their provenance records)
     mesh_label_images(sorted(images.iterdir()), 1, meshes, cut_planes=planes, progress=False,
-                      rv_label=2)  # fmt: skip
+                      rv_label=2, rv_septum=septum)  # fmt: skip
     table = read_landmarks(meshes / "landmarks.csv")
     write_landmarks(meshes / "landmarks.csv", {"atlas": synthetic_landmarks(data.cohort.atlas),
                                                **table})  # fmt: skip

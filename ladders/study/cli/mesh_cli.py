@@ -131,6 +131,10 @@ def add_mesh_parser(sub) -> None:
     p.add_argument("--rv-label", type=nonnegative_int, default=None, metavar="INT",
                    help="the right ventricle's label: find each mesh's apex, base-plane centre "
                         "and septal point and write landmarks.csv (default: no landmarks)")  # fmt: skip
+    p.add_argument("--rv-septum", choices=("insertion", "centroid"), default="insertion",
+                   help="with --rv-label, the septal direction: half way between the RV's "
+                        "insertion points (its angular edges about the long axis, as the AHA "
+                        "segments are bounded) or towards the RV's centroid")  # fmt: skip
     p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
     p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -159,7 +163,7 @@ def run_mesh_command(args) -> int:
         outcome = mesh_label_images(
             args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,
             progress=not args.no_progress, ext=args.ext, cut_planes=planes,
-            rv_label=args.rv_label,
+            rv_label=args.rv_label, rv_septum=args.rv_septum,
         )  # fmt: skip
     except (ImageError, ValueError) as exc:
         raise UsageError(f"symladders mesh: error: {exc}") from None

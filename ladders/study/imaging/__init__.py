@@ -38,7 +38,7 @@ from .label_images import (
 )
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
 from .rv_label import add_rv_label, voxel_centres
-from .septum import label_centroid, landmarks_from_labels, lv_apex_and_base
+from .septum import label_centroid, label_points, landmarks_from_labels, lv_apex_and_base
 from .surface_extraction import (
     MeshingSettings,
     SurfaceReport,
@@ -73,6 +73,7 @@ __all__ = [
     "voxel_centres",
     "label_centroid",
     "landmarks_from_labels",
+    "label_points",
     "lv_apex_and_base",
     "BACKGROUND",
     "BLOOD_POOL",

@@ -27,7 +27,7 @@ in several runs, e.g. one subject at a time, make one table). An image whose
 landmarks cannot be found (the RV label absent, its centroid on the LV's long axis)
 fails like any other: no new mesh, its reason in ``meshing.csv``, no row in the
 table. A rerun reuses a mesh only when its record has the landmarks of the same RV
-label.
+label, taken the same way (``rv_septum``).
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, Landmarks, write_landmarks
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
-from .septum import landmarks_from_labels
+from .septum import SEPTUM_METHODS, landmarks_from_labels
 from .surface_extraction import MeshingSettings, extract_surface
 
 __all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images", "REPORT_FILE"]
@@ -184,7 +184,13 @@ def _folder_landmarks(folder: Path, ext: str, records: list) -> dict:
 
 
 def _matching_record(
-    record_path: Path, sha: str, task: MeshingTask, label: int, settings, rv_label: int | None
+    record_path: Path,
+    sha: str,
+    task: MeshingTask,
+    label: int,
+    settings,
+    rv_label: int | None,
+    rv_septum: str = "insertion",
 ) -> dict | None:
     """The provenance record of a mesh made from the same inputs (None: none such)."""
     try:
@@ -200,7 +206,8 @@ def _matching_record(
         and record.get("settings") == settings.as_dict()
     )
     if rv_label is not None:  # the landmarks of this RV label are part of the result
-        same = same and record.get("rv_label") == rv_label and _landmarks_of(record) is not None
+        same = (same and record.get("rv_label") == rv_label and _landmarks_of(record) is not None
+                and record.get("rv_septum", "centroid") == rv_septum)  # fmt: skip
     return record if same else None
 
 
@@ -234,6 +241,7 @@ def _meshed(
     folder: Path,
     settings: MeshingSettings,
     rv_label: int | None = None,
+    rv_septum: str = "insertion",
 ) -> dict | None:
     """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of an image meshed before
     from the same file, frame, label, settings (and RV label) (None: it is meshed)."""
@@ -244,7 +252,8 @@ def _meshed(
         sha = file_sha256(task.source)
     except OSError:
         return None  # the worker records why
-    record = _matching_record(out.with_suffix(".json"), sha, task, label, settings, rv_label)
+    record = _matching_record(out.with_suffix(".json"), sha, task, label, settings, rv_label,
+                              rv_septum)  # fmt: skip
     if record is None:
         return None
     landmarks = None if rv_label is None else _landmarks_of(record)
@@ -257,6 +266,7 @@ def _mesh_one(
     folder: Path,
     settings: MeshingSettings,
     rv_label: int | None = None,
+    rv_septum: str = "insertion",
 ) -> dict:
     out = folder / task.output
     record_path = out.with_suffix(".json")
@@ -272,7 +282,8 @@ def _mesh_one(
             # the base-plane centre on the valve plane itself, not on the plane moved by the
             # cut's margin: the landmark is anatomical, the margin only removes the lid
             landmarks = landmarks_from_labels(vertices, faces, image, rv_label,
-                                              cut_plane=settings.cut_plane)  # fmt: skip
+                                              cut_plane=settings.cut_plane,
+                                              septum=rv_septum)  # fmt: skip
         write_mesh(out, vertices, faces, atomic=True)
         record = {
             "source": str(task.source.resolve()), "sha256": sha, "label": label,
@@ -282,6 +293,7 @@ def _mesh_one(
         }  # fmt: skip
         if landmarks is not None:
             record["rv_label"] = rv_label
+            record["rv_septum"] = rv_septum
             record["landmarks"] = {"apex": landmarks.apex.tolist(), "base": landmarks.base.tolist(),
                                    "septum": landmarks.septum.tolist()}  # fmt: skip
         atomic_write_text(record_path, json.dumps(record, indent=1))
@@ -311,6 +323,7 @@ def mesh_label_images(
     ext: str = ".vtk",
     cut_planes: dict | None = None,
     rv_label: int | None = None,
+    rv_septum: str = "insertion",
 ) -> MeshingOutcome:
     """Mesh the label ``label`` of every image into ``output`` (see the module).
 
@@ -337,6 +350,10 @@ def mesh_label_images(
     rv_label : int, optional
         The right ventricle's label in the same images: each mesh gets its landmarks
         and the folder a landmark table (see the module). None: no landmarks.
+    rv_septum : {"insertion", "centroid"}
+        How the septal direction is taken from the RV label: the bisector of its
+        insertion points or the direction of its centroid
+        (:func:`~.septum.landmarks_from_labels`'s ``septum``).
 
     Returns
     -------
@@ -352,13 +369,15 @@ def mesh_label_images(
         rv_label = int(rv_label)
         if rv_label == int(label):
             raise ValueError(f"rv_label: must differ from the LV's label ({label})")
+    if rv_septum not in SEPTUM_METHODS:
+        raise ValueError(f"rv_septum: expected one of {SEPTUM_METHODS}, got {rv_septum!r}")
     images = [Path(p) for p in images]
     bad = [p for p in images if not p.name.lower().endswith(IMAGE_SUFFIXES)]
     if bad:
         raise ImageError(f"{bad[0]}: not a NIfTI label image (.nii or .nii.gz)")
     folder = Path(output)
     folder.mkdir(parents=True, exist_ok=True)
-    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label)
+    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label, rv_septum)
              for t in plan_meshing(images, frames, ext)]  # fmt: skip
     records = []
     landmarks_file = None if rv_label is None else folder / LANDMARKS_FILE
