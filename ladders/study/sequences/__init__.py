@@ -12,9 +12,10 @@ the curve's peak and time to peak.
 See ``docs/tracking.md``, "The whole cycle in the study".
 """
 
-from .cycle_analysis import CycleMotion, CycleTests, compare_cycles, curve_peaks, load_cycle_motion
+from .cycle_analysis import CycleMotion, CycleTests, compare_cycles, load_cycle_motion
 from .cycle_study import REPORT_FILE, CycleStudyOutcome, read_tracked_frames, run_cycle_study
 from .frame_transport import FrameTransport, check_frames, transport_frames
+from .peaks import curve_peaks
 
 __all__ = [
     "CycleMotion",
