@@ -159,11 +159,13 @@ class HamiltonianFlow(FlowModel):
             initial_velocity=velocity,
             system=system,
         )
+        with np.errstate(over="ignore", invalid="ignore"):  # a non-finite shot is named
+            norm_sq = float((momenta * velocity).sum())  # by its caller, not warned here
         return FlowPass(
             deformed=final[2] if carried else final[0],
             control_points=control_points,
             momenta=momenta,
-            norm_sq=float((momenta * velocity).sum()),
+            norm_sq=norm_sq,
             velocity=velocity,
             state=shot,
         )
