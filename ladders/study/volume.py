@@ -14,15 +14,20 @@ import numpy as np
 
 from manifolds.data_terms.mesh_geometry import check_mesh
 
-__all__ = ["boundary_vertices", "enclosed_volume"]
+__all__ = ["boundary_edges", "boundary_vertices", "enclosed_volume"]
+
+
+def boundary_edges(faces) -> np.ndarray:
+    """The boundary edges (used by one triangle only), shape ``(b, 2)``, each sorted."""
+    f = np.asarray(faces, dtype=np.int64)
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    return unique[counts == 1]
 
 
 def boundary_vertices(faces) -> np.ndarray:
     """Indices of the vertices on boundary edges (edges used by one triangle only)."""
-    f = np.asarray(faces, dtype=np.int64)
-    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    unique, counts = np.unique(edges, axis=0, return_counts=True)
-    return np.unique(unique[counts == 1])
+    return np.unique(boundary_edges(faces))
 
 
 def enclosed_volume(vertices, faces) -> float | np.ndarray:

@@ -54,6 +54,10 @@ __all__ = [
 ]
 
 
+#: The surface distances of a correspondence's quality (the template's rim aware).
+_QUALITY_DISTANCES = ("hausdorff", "mean_surface_distance", "beyond_rim_fraction")
+
+
 @dataclass
 class MeshCorrespondence:
     """The atlas deformed onto one mesh.
@@ -68,7 +72,9 @@ class MeshCorrespondence:
     quality : dict
         ``distance_before``, ``distance_after`` (the data term's distance, unweighted),
         ``hausdorff``, ``mean_surface_distance`` (to the aligned input mesh, the
-        atlas's unit), ``converged``, ``n_iter``; for an end-diastole aligned here,
+        atlas's unit, leaving out the mesh's vertices beyond the template's rim, e.g.
+        a label's lid: :func:`~.surface_distance.surface_distances`),
+        ``beyond_rim_fraction`` (the fraction of them), ``converged``, ``n_iter``; for an end-diastole aligned here,
         the alignment's ``alignment``, ``axial_spread_deg`` and
         ``landmark_disagreement_deg``; for a normal projection ``normal_hit_fraction``.
     registration : RegistrationResult or None
@@ -155,8 +161,8 @@ def correspond_mesh(
         "distance_after": float(term.distance(res.deformed) / np.sqrt(term.weight)),
         **{
             k: v
-            for k, v in surface_distances(res.deformed, tf, moved, mf).items()
-            if k in ("hausdorff", "mean_surface_distance")
+            for k, v in surface_distances(res.deformed, tf, moved, mf, skip_beyond_rim=True).items()
+            if k in _QUALITY_DISTANCES
         },
         "converged": bool(res.converged),
         "n_iter": int(res.n_iter),
@@ -205,8 +211,8 @@ def project_mesh(
     quality = {
         **{
             k: v
-            for k, v in surface_distances(proj.points, tf, moved, mf).items()
-            if k in ("hausdorff", "mean_surface_distance")
+            for k, v in surface_distances(proj.points, tf, moved, mf, skip_beyond_rim=True).items()
+            if k in _QUALITY_DISTANCES
         },
         "converged": True,
         "n_iter": 0,

@@ -2,7 +2,10 @@
 
 A row holds the data term's distance before and after the registration, the
 Hausdorff and mean surface distances of the corresponded mesh to its input (in
-the atlas's unit), the optimiser's convergence and iterations. A mesh is flagged
+the atlas's unit; the input's vertices beyond the atlas's rim, such as the lid a
+label image gives a ventricle at its valve plane, are left out, and
+``beyond_rim_fraction`` says what fraction they are), the optimiser's convergence
+and iterations. A mesh is flagged
 when its subject failed (the reason is given), its registration did not
 converge, a distance exceeds the settings' thresholds, its mean surface
 distance is more than three times the cohort's median (at least five meshes),
@@ -32,6 +35,7 @@ COLUMNS = (
     "subject", "phase", "status", "flagged", "reasons", "n_input_vertices", "distance_before",
     "distance_after", "hausdorff", "mean_surface_distance", "converged", "n_iter", "unit",
     "alignment", "axial_spread_deg", "landmark_disagreement_deg", "normal_hit_fraction",
+    "beyond_rim_fraction",
 )  # fmt: skip
 
 
