@@ -97,6 +97,16 @@ def test_the_flags_reach_the_library(tmp_path, monkeypatch):
     run_cli("correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes", tmp_path / "seg",
             "-o", tmp_path / "out", "--landmark-anchor", "none")  # fmt: skip
     assert seen["settings"].anchor_weight == 0.0
+    run_cli("correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes", tmp_path / "seg",
+            "-o", tmp_path / "out", "--flag-hausdorff", "8", "--flag-mean-distance", "0.7")  # fmt: skip
+    flags = seen["settings"]
+    assert (flags.flag_hausdorff, flags.flag_mean_distance) == (8.0, 0.7)
+    # thresholds that only read the quality do not make the results new
+    assert flags.key() == preparation.CorrespondenceSettings().key()
+    assert flags.replace(alpha=1.0).key() != flags.key()
+    status, _, err = run_cli("correspond", "--atlas", tmp_path / "seg" / "atlas.vtk", "--meshes",
+                             tmp_path / "seg", "-o", tmp_path / "out", "--flag-hausdorff", "-1")  # fmt: skip
+    assert status == 2 and "--flag-hausdorff" in err
 
 
 # ------------------------------------------------------------------ atlas

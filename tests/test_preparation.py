@@ -180,6 +180,13 @@ def test_correspond_cohort_resumes(segmentations):
     out = correspond_cohort(root / "atlas.vtk", root / "seg", root / "out", FAST, units="auto")
     assert sorted(out.reused) == ["synthetic_000", "synthetic_001", "synthetic_002"]
     assert out.computed == ["broken"]  # failed subjects are retried
+    # other thresholds of inspection reuse every result and flag again from their quality
+    strict = FAST.replace(flag_hausdorff=1e-9, flag_mean_distance=1e-9)
+    flagged = correspond_cohort(
+        root / "atlas.vtk", root / "seg", root / "out", strict, units="auto"
+    )
+    assert sorted(flagged.reused) == sorted(out.reused)
+    assert all(r["flagged"] for r in flagged.quality if r["status"] == "ok")
     other = FAST.replace(sigma_w=7.0)
     again = correspond_cohort(root / "atlas.vtk", root / "seg", root / "out", other, units="auto")
     assert again.reused == []

@@ -13,7 +13,14 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .cli_types import DefaultsFormatter, UsageError, existing_folder, jobs_count, output_folder
+from .cli_types import (
+    DefaultsFormatter,
+    UsageError,
+    existing_folder,
+    jobs_count,
+    output_folder,
+    positive_float,
+)
 from .preparation_arguments import (
     add_data_term_arguments,
     add_landmark_arguments,
@@ -33,6 +40,7 @@ _SHOWN = 10  # flagged meshes named in the last line
 def add_correspond_parser(sub) -> None:
     """Register the ``correspond`` subcommand on an argparse subparsers object."""
     from ..meshes import WRITE_EXTENSIONS
+    from ..preparation import CorrespondenceSettings
 
     p = sub.add_parser(
         "correspond",
@@ -104,6 +112,22 @@ def add_correspond_parser(sub) -> None:
         "docs/preparation.md)",
     )
     add_data_term_arguments(p)
+    p.add_argument(
+        "--flag-hausdorff",
+        type=positive_float,
+        default=CorrespondenceSettings().flag_hausdorff,
+        metavar="MM",
+        help="flag a mesh for inspection when its Hausdorff distance to the corresponded "
+        "atlas exceeds this (thick slices end in a flat apical cap up to half a slice "
+        "beyond the apex); only the quality table changes, the results are reused",
+    )
+    p.add_argument(
+        "--flag-mean-distance",
+        type=positive_float,
+        default=CorrespondenceSettings().flag_mean_distance,
+        metavar="MM",
+        help="flag a mesh for inspection when its mean surface distance exceeds this",
+    )
     _add_run_arguments(p)
     p.set_defaults(run=run_correspond_command)
 
@@ -179,8 +203,9 @@ def run_correspond_command(args) -> int:
     entries = _scan(args.meshes)
     anchor = {"none": {"anchor_weight": 0.0}}.get(args.landmark_anchor, {"anchor": args.landmark_anchor})  # fmt: skip
     settings = correspondence_settings(
-        args, alignment=args.alignment, es_correspondence=args.es_correspondence, **anchor
-    )
+        args, alignment=args.alignment, es_correspondence=args.es_correspondence,
+        flag_hausdorff=args.flag_hausdorff, flag_mean_distance=args.flag_mean_distance, **anchor,
+    )  # fmt: skip
     landmarks = landmarks_argument(args, args.meshes)
     output = Path(args.output)
     print_line(

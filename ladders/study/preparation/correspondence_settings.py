@@ -23,6 +23,8 @@ from manifolds.validation import check_float
 __all__ = ["CorrespondenceSettings"]
 
 _TERMS = {"varifold": VarifoldDistance, "current": CurrentDistance}
+#: The settings that only flag a mesh for inspection (not part of :meth:`CorrespondenceSettings.key`).
+_FLAGS = ("flag_mean_distance", "flag_hausdorff", "flag_axial_spread", "flag_landmark_disagreement")
 
 
 def _default_registration() -> RegistrationSettings:
@@ -167,9 +169,15 @@ class CorrespondenceSettings:
         return out
 
     def key(self) -> str:
-        """Stable hash of every setting (the registration's key with its backend resolved)."""
+        """Stable hash of the settings that make the result (the registration's key with its
+        backend resolved). The thresholds that flag a mesh for inspection (``flag_*``) are
+        left out: they only read the quality, which the table applies when it is written,
+        so a folder corresponded before is reused whatever they are."""
         payload = self.as_dict()
         payload["registration"] = self.registration.key()
+        default = CorrespondenceSettings.__dataclass_fields__
+        for name in _FLAGS:  # as the defaults, so that keys written before stay valid
+            payload[name] = default[name].default
         text = json.dumps(payload, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
