@@ -33,6 +33,11 @@ Measured per cohort and images, beside the same tests on the true frames:
   splits of the controls, with a binomial interval. No transport (the ED meshes are in
   the atlas's correspondence and pose).
 
+With ``--transport`` the table is ``cycle_cine_transport``: every tracked subject's frames
+also carried to the atlas by the pole ladder with residuals (``alpha^2 = 100``,
+:func:`~ladders.study.sequences.run_cycle_study`, as ``symladders cycle-study``), the
+normal peak's tests (max-t and TFCE) with and without that transport.
+
 With ``--fwhm 10`` the table is ``cycle_cine_smoothed``: the normal peak's tests (max-t
 and TFCE) on the raw maps and on every map smoothed on the atlas by the heat kernel of
 that full width at half maximum (``compare_cycles(..., fwhm=10)``), with the region's
@@ -74,21 +79,27 @@ from ladders.study.sequences import (  # noqa: E402
     CycleMotion,
     compare_cycles,
     curve_peaks,
+    load_cycle_motion,
     read_tracked_frames,
+    run_cycle_study,
 )
 from ladders.study.tracking import CineTrackingSettings, track_cohort  # noqa: E402
 
 COHORTS = {"twist": MotionAbnormality("twist", transition_height=0.1),
            "hypokinesia_mild": replace(CYCLE_ABNORMALITY, magnitude=0.2)}  # fmt: skip
 IMAGES = {"tagged": TagGrid(), "plain": None}
+#: The pole ladder's residual weight of ``--transport`` (that of ``bench_cycle_routes``).
+ALPHA2 = 100.0
 
 
 def _cycles(name, n, n_frames):
     return make_two_group_cycles(n_subjects=n, abnormality=COHORTS[name], n_frames=n_frames)
 
 
-def run_route(work: Path, name: str, images: str, n: int, n_frames: int, jobs: int) -> dict:
-    """Write the cine series and track every subject (each stage resumes); seconds."""
+def run_route(work: Path, name: str, images: str, n: int, n_frames: int, jobs: int,
+              transport: bool = False) -> dict:  # fmt: skip
+    """Write the cine series, track every subject and, with ``transport``, carry the
+    tracked frames to the atlas (each stage resumes); seconds."""
     c = _cycles(name, n, n_frames)
     root = work / f"{name}_{images}"
     seconds = {}
@@ -104,6 +115,13 @@ def run_route(work: Path, name: str, images: str, n: int, n_frames: int, jobs: i
         print(f"  {name} {images}: failed {outcome.failed}", flush=True)
     print(f"  {name} {images}: render {seconds['render']:.0f} s, track "
           f"{seconds['track']:.0f} s", flush=True)  # fmt: skip
+    if transport:
+        atlas, faces = read_mesh(root / "cohort" / "atlas.vtk")
+        start = time.perf_counter()
+        run_cycle_study(atlas, faces, read_tracked_frames(root / "tracked"),
+                        root / "cycle_study", alpha2=ALPHA2, jobs=jobs)  # fmt: skip
+        seconds["cycle_study"] = time.perf_counter() - start
+        print(f"  {name} {images}: cycle study {seconds['cycle_study']:.0f} s", flush=True)
     return seconds
 
 
@@ -161,13 +179,25 @@ def _tests_smoothed(motion: CycleMotion, labels, es, permutations: int, rng, axi
                  for t in (r.peak.p_fwer < 0.05, r.peak_tfce.p_fwer_enhanced < 0.05))  # fmt: skip
 
 
-def _scores(motion, c, permutations, repetitions, rng, fwhm=None):
+#: The transport rows' tests (``--transport``), part of their cached rows' key.
+TESTS_TRANSPORT = "normal peak, normal peak TFCE"
+
+
+def _tests_normal(motion: CycleMotion, labels, permutations: int, rng):
+    """Significant vertices of the normal peak and of its TFCE."""
+    normal = compare_cycles(motion, labels, permutations, rng, tfce=True)
+    return normal.peak.p_fwer < 0.05, normal.peak_tfce.p_fwer_enhanced < 0.05
+
+
+def _scores(motion, c, permutations, repetitions, rng, fwhm=None, transport=False):
     es = int(np.argmax(c.fractions))
     labels = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
     region = c.data.region.affected
     axis = synthetic_landmarks(c.data.cohort.atlas)
 
     def tests(m, split, count):
+        if transport:
+            return _tests_normal(m, split, count, rng)
         if fwhm is None:
             return _tests(m, split, es, count, rng, axis)
         return _tests_smoothed(m, split, es, count, rng, axis, fwhm)
@@ -212,11 +242,13 @@ def _fingerprint(folder: Path) -> str:
 
 
 def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, seed=0,
-         fwhm=None) -> list:  # fmt: skip
+         fwhm=None, transport=False) -> list:  # fmt: skip
     """The table's rows; each (cohort, motion) with its own random stream, kept in
     ``WORK/rows.json`` as it finishes and reused while its inputs are the same. With
-    ``fwhm``: the normal peak's tests on raw and smoothed maps."""
+    ``fwhm``: the normal peak's tests on raw and smoothed maps; with ``transport``: the
+    normal peak's tests, the tracked frames also transported by the pole ladder."""
     tests = TESTS if fwhm is None else f"{TESTS_SMOOTHED} = {fwhm:g}"
+    tests = TESTS_TRANSPORT if transport else tests
     cache_path = work / "rows.json"
     cache = json.loads(cache_path.read_text()) if cache_path.is_file() else {}
     work.mkdir(parents=True, exist_ok=True)
@@ -228,17 +260,27 @@ def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, se
             root = work / f"{name}_{kind}"
             if (root / "tracked").is_dir():
                 names, frames = _tracked(root, c)
-                motions.append((f"{kind} cine, tracked", _errors(c, names, frames), names, frames,
+                errors = _errors(c, names, frames)
+                motions.append((f"{kind} cine, tracked", errors, names, frames,
                                 _fingerprint(root / "tracked")))  # fmt: skip
+                if transport and (root / "cycle_study" / "cycle_study.json").is_file():
+                    moved = load_cycle_motion(root / "cycle_study")
+                    motions.append((f"{kind} cine, tracked, pole ladder alpha^2 = {ALPHA2:g}",
+                                    errors, moved, None, _fingerprint(root / "cycle_study")))  # fmt: skip
         for label, errors, names, frames, source in motions:
             key = f"{name}|{label}|{n}|{n_frames}|{permutations}|{repetitions}|{seed}|{source}|{tests}"
-            motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
-                                 c.faces)  # fmt: skip
+            if frames is None:  # already on the atlas: the study's transported frames
+                motion, names = names, names.subjects
+            else:
+                motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
+                                     c.faces)  # fmt: skip
             if key not in cache:
                 index = [tuple(COHORTS).index(name), 1 + list(IMAGES).index(label.split()[0])
                          if errors is not None else 0]  # fmt: skip
+                if transport:  # the transported row a stream of its own
+                    index.append(int("pole ladder" in label))
                 rng = np.random.default_rng([seed, *index])
-                scores = _scores(motion, c, permutations, repetitions, rng, fwhm)
+                scores = _scores(motion, c, permutations, repetitions, rng, fwhm, transport)
                 cache[key] = [name, label, len(names), errors, *scores]
                 cache_path.write_text(json.dumps(cache, indent=1))
             effects = [_peak_effect(motion, c)]
@@ -265,45 +307,56 @@ def _note(n_frames, permutations, repetitions) -> str:
     )
 
 
-def _table_smoothed(rows, n_frames, permutations, repetitions, fwhm) -> str:
-    lines = [
-        "| cohort | motion | subjects | ES error normal / along the wall (mm), twist error "
-        "(deg) | normal peak (t): power / Dice, null FWER [95 % CI] | normal peak with TFCE | "
-        f"maps smoothed {fwhm:g} mm FWHM: normal peak (t) | maps smoothed, normal peak with "
-        "TFCE | normal peak in the planted region: group difference (mm), effect size, raw; "
-        "smoothed |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for name, label, n, err, *tests, raw, smooth in rows:
-        cells = [f"{p:.2f} / {d:.2f}, {r:.2f} [{lo:.2f}, {hi:.2f}]" for p, d, r, lo, hi in tests]
-        cells.append(f"{raw[0]:.2f}, {raw[1]:.2f}; {smooth[0]:.2f}, {smooth[1]:.2f}")
+def _markdown(rows, tests: list[str], effect: str, note: str) -> str:
+    """The note and the table: a column per test (power / Dice, null FWER [95 % CI]) and
+    the region's effect (group difference, effect size; raw, then smoothed if given)."""
+    head = ["cohort", "motion", "subjects", "ES error normal / along the wall (mm), twist "
+            "error (deg)", *tests, effect]  # fmt: skip
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name, label, n, err, *scores in rows:
+        cells = [f"{p:.2f} / {d:.2f}, {r:.2f} [{lo:.2f}, {hi:.2f}]"
+                 for p, d, r, lo, hi in scores[:len(tests)]]  # fmt: skip
+        cells.append("; ".join(f"{a:.2f}, {b:.2f}" for a, b in scores[len(tests) :]))
         lines.append(f"| {name} | {label} | {n} | {_errors_cell(err)} | " + " | ".join(cells)
                      + " |")  # fmt: skip
+    return note + "\n\n" + "\n".join(lines) + "\n"
+
+
+def _table_smoothed(rows, n_frames, permutations, repetitions, fwhm) -> str:
+    tests = ["normal peak (t): power / Dice, null FWER [95 % CI]", "normal peak with TFCE",
+             f"maps smoothed {fwhm:g} mm FWHM: normal peak (t)",
+             "maps smoothed, normal peak with TFCE"]  # fmt: skip
     note = _note(n_frames, permutations, repetitions) + (
         f" Smoothed: every subject's normal-motion map at every frame smoothed on the atlas "
         f"by the heat kernel of {fwhm:g} mm full width at half maximum before the tests "
         f"(`cycle-analyze --fwhm {fwhm:g}`); the raw and smoothed tests of a row share its "
         "random stream."
     )
-    return note + "\n\n" + "\n".join(lines) + "\n"
+    return _markdown(rows, tests, "normal peak in the planted region: group difference (mm), "
+                     "effect size, raw; smoothed", note)  # fmt: skip
+
+
+def _table_transport(rows, n_frames, permutations, repetitions) -> str:
+    tests = ["normal peak (t): power / Dice, null FWER [95 % CI]",
+             "normal peak with TFCE: power / Dice, null FWER [95 % CI]"]  # fmt: skip
+    note = _note(n_frames, permutations, repetitions).replace("No transport.", (
+        f"Rows 'pole ladder': every tracked frame's deformation from the subject's ED carried "
+        f"to the atlas by the pole ladder with residuals, alpha^2 = {ALPHA2:g} "
+        "(`symladders cycle-study`); the other rows untransported (the ED meshes are in the "
+        "atlas's correspondence and pose)."))  # fmt: skip
+    return _markdown(rows, tests, EFFECT, note)
+
+
+#: The last column of the tables without smoothing.
+EFFECT = "normal peak in the planted region: group difference (mm), effect size"
 
 
 def _table(rows, n_frames, permutations, repetitions) -> str:
-    lines = [
-        "| cohort | motion | subjects | ES error normal / along the wall (mm), twist error "
-        "(deg) | ES displacement (Hotelling): power / Dice, null FWER [95 % CI] | peak "
-        "rotation about the long axis (t): power / Dice, null FWER | normal peak (t): power / "
-        "Dice, null FWER | normal peak with TFCE: power / Dice, null FWER | normal peak in the "
-        "planted region: group difference (mm), effect size |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for name, label, n, err, *tests, effect in rows:
-        e = _errors_cell(err)
-        cells = [f"{p:.2f} / {d:.2f}, {r:.2f} [{lo:.2f}, {hi:.2f}]" for p, d, r, lo, hi in tests]
-        cells.append(f"{effect[0]:.2f}, {effect[1]:.2f}")
-        lines.append(f"| {name} | {label} | {n} | {e} | " + " | ".join(cells) + " |")
-    note = _note(n_frames, permutations, repetitions)
-    return note + "\n\n" + "\n".join(lines) + "\n"
+    tests = ["ES displacement (Hotelling): power / Dice, null FWER [95 % CI]",
+             "peak rotation about the long axis (t): power / Dice, null FWER",
+             "normal peak (t): power / Dice, null FWER",
+             "normal peak with TFCE: power / Dice, null FWER"]  # fmt: skip
+    return _markdown(rows, tests, EFFECT, _note(n_frames, permutations, repetitions))
 
 
 def main(argv=None) -> None:
@@ -317,6 +370,10 @@ def main(argv=None) -> None:
     parser.add_argument("--fwhm", type=float, default=None,
                         help="instead: the normal peak's tests on raw maps and on maps smoothed "
                              "by this FWHM (mm), published as cycle_cine_smoothed")  # fmt: skip
+    parser.add_argument("--transport", action="store_true",
+                        help="instead: the normal peak's tests with the tracked frames also "
+                             "transported by the pole ladder, published as "
+                             "cycle_cine_transport")  # fmt: skip
     parser.add_argument("--publish", action="store_true")
     args = parser.parse_args(argv)
     print(machine(), flush=True)
@@ -326,17 +383,21 @@ def main(argv=None) -> None:
     if not args.no_run:
         for name in args.cohorts:
             for kind in args.images:
-                run_route(work, name, kind, n, n_frames, args.jobs)
+                run_route(work, name, kind, n, n_frames, args.jobs, args.transport)
     found = rows(work, args.cohorts, args.images, n, n_frames, permutations, repetitions,
-                 fwhm=args.fwhm)  # fmt: skip
-    if args.fwhm is None:
+                 fwhm=args.fwhm, transport=args.transport)  # fmt: skip
+    if args.transport:
+        table = _table_transport(found, n_frames, permutations, repetitions)
+    elif args.fwhm is None:
         table = _table(found, n_frames, permutations, repetitions)
     else:
         table = _table_smoothed(found, n_frames, permutations, repetitions, args.fwhm)
     missing = [f"{name} through {kind} cine" for name in args.cohorts for kind in args.images
                if not (work / f"{name}_{kind}" / "tracked").is_dir()]  # fmt: skip
     if missing:
-        table = table.replace("No transport.", f"No transport. Not run: {', '.join(missing)}.", 1)
+        text = f"Not run: {', '.join(missing)}."
+        table = (table.replace("Rows 'pole ladder'", f"{text} Rows 'pole ladder'", 1)
+                 if args.transport else table.replace("No transport.", f"No transport. {text}", 1))  # fmt: skip
     print("\n" + table)
     if args.publish:
         # the stages resume: a run with --no-run publishes what the full command computes
@@ -344,8 +405,10 @@ def main(argv=None) -> None:
         command += " ".join(args.cohorts) + " --images " + " ".join(args.images)
         if args.fwhm is not None:
             command += f" --fwhm {args.fwhm:g}"
-        publish("cycle_cine" if args.fwhm is None else "cycle_cine_smoothed", table,
-                command + " --publish")  # fmt: skip
+        command += " --transport" * args.transport
+        name = "cycle_cine_transport" if args.transport else (
+            "cycle_cine" if args.fwhm is None else "cycle_cine_smoothed")  # fmt: skip
+        publish(name, table, command + " --publish")
 
 
 if __name__ == "__main__":
