@@ -23,6 +23,7 @@ from ladders.study.preparation import (
     surface_distances,
     vertex_error_components,
 )
+from ladders.study.preparation.correspondence import QUALITY_DISTANCES
 from manifolds.lddmm import RegistrationSettings
 
 from .vtp_writer import vtp_bytes
@@ -190,6 +191,29 @@ def test_correspond_cohort_resumes(segmentations):
     other = FAST.replace(sigma_w=7.0)
     again = correspond_cohort(root / "atlas.vtk", root / "seg", root / "out", other, units="auto")
     assert again.reused == []
+
+
+def test_a_reused_record_of_an_older_quality_gets_the_current_distances(segmentations):
+    root, _ = segmentations
+    args = (root / "atlas.vtk", root / "seg", root / "out", FAST)
+    correspond_cohort(*args, units="auto")
+    path = root / "out" / "correspondence" / "synthetic_000.json"
+    record = json.loads(path.read_text())
+    expected = {p: {k: record[p][k] for k in QUALITY_DISTANCES} for p in ("ed", "es")}
+    for phase in ("ed", "es"):  # as written before the rim-aware distances
+        del record[phase]["beyond_rim_fraction"]
+        record[phase]["hausdorff"] = -1.0
+    path.write_text(json.dumps(record))
+    again = correspond_cohort(*args, units="auto")
+    assert sorted(again.reused) == ["synthetic_000", "synthetic_001", "synthetic_002"]
+    stored = json.loads(path.read_text())
+    for phase in ("ed", "es"):
+        for k in QUALITY_DISTANCES:  # from the stored meshes (written in float32)
+            assert stored[phase][k] == pytest.approx(expected[phase][k], abs=1e-4), (phase, k)
+    rows = [r for r in again.quality if r["subject"] == "synthetic_000"]
+    assert [r["hausdorff"] for r in rows] == pytest.approx(
+        [expected[r["phase"]]["hausdorff"] for r in rows], abs=1e-4
+    )
 
 
 def test_any_atlas_format_and_a_failure_leaves_no_earlier_meshes(cohort, tmp_path):

@@ -24,6 +24,9 @@ meshes from an earlier run are removed (the study must not read them), and the
 others finish. Every file is written atomically and a subject's record last, so
 an interrupted run loses nothing: the next run with the same atlas, settings
 and input files skips the subjects already done (failed ones are retried).
+A reused record written with an older definition of the quality's surface distances
+(before ``beyond_rim_fraction``) gets them again from its stored meshes, so that the
+quality table of a rerun is that of the current definition.
 The arguments are those a command line needs (atlas, meshes, output, jobs,
 progress, resume), so a command is a thin wrapper.
 """
@@ -44,7 +47,8 @@ from ..cohort.mesh_folder import natural_key, scan_mesh_folder
 from ..files import array_digest, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, read_mesh, write_mesh
 from ..running.store import validate_subject_name
-from .correspondence import CorrespondenceSettings, correspond_subject
+from .alignment import SimilarityTransform
+from .correspondence import QUALITY_DISTANCES, CorrespondenceSettings, correspond_subject
 from .landmarks import (
     LANDMARKS_FILE,
     LandmarkError,
@@ -54,6 +58,7 @@ from .landmarks import (
     read_landmarks,
 )
 from .quality_table import write_quality_table
+from .surface_distance import surface_distances
 from .units import check_units_and_pose
 
 __all__ = ["CohortCorrespondence", "correspond_cohort", "scan_segmentations"]
@@ -145,10 +150,30 @@ def _reuse_check(resume: bool, outcome):
         if resume:
             record = _reusable(output / RECORDS / f"{name}.json", fingerprint, output, name, ext)
         if record is not None:
+            record = _refresh_quality(record, slot, atlas[1], factor, output, name, ext)
             outcome.reused.append(name)
         return record
 
     return stored
+
+
+def _refresh_quality(record: dict, slot, faces, factor, output: Path, name: str, ext: str):
+    """The record with the current quality distances: recomputed from the stored meshes
+    and the recorded transform (rewritten) when a phase lacks one of them."""
+    if all(k in record.get(p, {}) for p in ("ed", "es") for k in QUALITY_DISTANCES):
+        return record
+    try:
+        transform = SimilarityTransform.from_dict(record["transform"])
+        for phase in ("ed", "es"):
+            v, f = read_mesh(slot[phase])
+            corresponded = read_mesh(output / f"{name}_{phase}{ext}")[0]
+            found = surface_distances(corresponded, faces, transform.apply(v * factor), f,
+                                      skip_beyond_rim=True)  # fmt: skip
+            record[phase].update({k: found[k] for k in QUALITY_DISTANCES})
+    except (KeyError, ValueError, OSError):  # not refreshable: kept as it was
+        return record
+    atomic_write_text(output / RECORDS / f"{name}.json", json.dumps(record, indent=1))
+    return record
 
 
 def _correspond_one(

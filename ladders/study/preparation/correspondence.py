@@ -55,7 +55,7 @@ __all__ = [
 
 
 #: The surface distances of a correspondence's quality (the template's rim aware).
-_QUALITY_DISTANCES = ("hausdorff", "mean_surface_distance", "beyond_rim_fraction")
+QUALITY_DISTANCES = ("hausdorff", "mean_surface_distance", "beyond_rim_fraction")
 
 
 @dataclass
@@ -162,7 +162,7 @@ def correspond_mesh(
         **{
             k: v
             for k, v in surface_distances(res.deformed, tf, moved, mf, skip_beyond_rim=True).items()
-            if k in _QUALITY_DISTANCES
+            if k in QUALITY_DISTANCES
         },
         "converged": bool(res.converged),
         "n_iter": int(res.n_iter),
@@ -212,7 +212,7 @@ def project_mesh(
         **{
             k: v
             for k, v in surface_distances(proj.points, tf, moved, mf, skip_beyond_rim=True).items()
-            if k in _QUALITY_DISTANCES
+            if k in QUALITY_DISTANCES
         },
         "converged": True,
         "n_iter": 0,
