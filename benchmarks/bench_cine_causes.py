@@ -90,7 +90,7 @@ def _best_bspline(frame, affine, shape, params, ed, f, near):
     )
 
 
-def _cylindrical(moved, truth, ed) -> tuple[float, float]:
+def cylindrical_error(moved, truth, ed) -> tuple[float, float]:
     """Mean error along the long axis (z) and about it (circumferential), mm."""
     error = moved - truth
     theta = np.arctan2(ed[:, 1], ed[:, 0])
@@ -138,7 +138,7 @@ def run() -> list[tuple]:
             rows.append((
                 name, gradient.replace("_", " "),
                 *split_error(fit_ed, truth_es, cohort.faces), abs(twist(p, ed, fit_ed) - truth_twist),
-                *_cylindrical(fit_ed, truth_es, ed),
+                *cylindrical_error(fit_ed, truth_es, ed),
                 *split_error(best, truth_es, cohort.faces), abs(twist(p, ed, best) - truth_twist),
                 metric(near), metric(motion_forward(p, near, fractions[es])),
                 metric(best_near), metric(fit_near),

@@ -29,6 +29,7 @@ from ladders.study.imaging import (
     render_cine,
     render_labels,
     short_axis_affine,
+    tag_pattern,
     write_series,
 )
 from ladders.study.population import (
@@ -280,6 +281,39 @@ def test_tag_lines_move_with_the_material(params):
     assert np.abs(pulled - es).mean() < 0.01
     same_place = ed_image[60:181, 60:181].ravel()  # the ED pattern where the ES image is
     assert np.corrcoef(same_place, es)[0, 1] < 0.5  # the lines have moved
+
+
+def test_3d_tag_planes_move_with_the_shortening(params):
+    flat = (1.0, 1.0, 1.0)  # the image is the tag pattern alone
+    h = 0.5
+    affine = np.diag([h, 1.0, h, 1.0])
+    affine[:3, 3] = [-30.0, 0.0, 10.0]  # a long-axis plane y = 0
+    shape = (121, 1, 121)
+    grid = TagGrid(spacing=7.0, axes=(0, 1, 2))
+    ed, es = (render_cine(params, affine, shape, f, None, 0.0, grid, supersample=1,
+                          intensities=flat)[:, 0, :] for f in (0.0, 1.0))  # fmt: skip
+    i, k = np.indices((121, 121)).reshape(2, -1)
+    points = np.column_stack([i * h - 30.0, np.zeros(i.size), k * h + 10.0])
+    # at ED, dark lines of constant z: every column dips at z = 7 k
+    on_plane = np.isclose(np.mod(points[:, 2], 7.0), 0.0)
+    assert ed.ravel()[on_plane].max() < 0.2 + 1e-9
+    expected = tag_pattern(motion_inverse(params, points, 1.0), grid)
+    assert np.corrcoef(es.ravel(), expected)[0, 1] > 0.99
+    assert np.corrcoef(es.ravel(), ed.ravel())[0, 1] < 0.5  # the planes have moved
+    in_plane = render_cine(params, affine, shape, 1.0, None, 0.0, TagGrid(spacing=7.0),
+                           supersample=1, intensities=flat)[:, 0, :].ravel()  # fmt: skip
+    across = in_plane > 0.05  # what the planes across the long axis add: m(z)
+    m_z = es.ravel()[across] / in_plane[across]
+    only_z = TagGrid(spacing=7.0, axes=(2,))
+    moved = tag_pattern(motion_inverse(params, points[across], 1.0), only_z)
+    assert np.corrcoef(m_z, moved)[0, 1] > 0.99  # at the material's ED height
+    assert np.corrcoef(m_z, tag_pattern(points[across], only_z))[0, 1] < 0.5  # not where they were
+
+
+@pytest.mark.parametrize("axes", [(), (0, 0), (3,), ("z",), (True, 1), 2])
+def test_tag_axes_are_checked(axes):
+    with pytest.raises(ImageError, match="^tagging.axes: "):
+        TagGrid(axes=axes)
 
 
 def test_cine_intensities_partial_volume_and_noise(params):

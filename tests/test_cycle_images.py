@@ -63,6 +63,15 @@ def test_cine_series_are_intensities_with_tagging(cycles, tmp_path):
         write_cycle_cohort(cycles, tmp_path / "x", "movie")
 
 
+@pytest.mark.parametrize("given, axes", [([], [0, 1]), (["2d"], [0, 1]), (["3d"], [0, 1, 2])])
+def test_cli_tagging_across_the_long_axis(tmp_path, given, axes):
+    out = tmp_path / "cohort"
+    argv = ["cohort", "--cycle", "3", "--subjects", "2", "--vertices", "241", "-o", str(out),
+            "--images", "cine", "--voxel", "4,4", "--tagging", *given]  # fmt: skip
+    assert main(argv) == 0
+    assert json.loads((out / "cycle.json").read_text())["tagging"]["axes"] == axes
+
+
 def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, capsys):
     out = tmp_path / "cohort"
     argv = ["cohort", "--cycle", "5", "--subjects", "6", "--vertices", "241", "-o", str(out)]
@@ -76,6 +85,7 @@ def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, cap
                            (["--ext", "ply"], "--ext: not with --cycle"),
                            (["--noise-length", "5"], "--noise-length: not with --cycle"),
                            (["--tagging"], "--tagging: only with --images cine"),
+                           (["--tagging", "3d"], "--tagging: only with --images cine"),
                            (["--voxel", "2"], "expected IN_PLANE,THICKNESS")):  # fmt: skip
         assert main(argv + extra) == 2
         assert message in capsys.readouterr().err

@@ -64,8 +64,17 @@ def add_cycle_arguments(p) -> None:
                         "intensities")  # fmt: skip
     g.add_argument("--voxel", type=_voxel, default=(1.5, 8.0), metavar="IN_PLANE,THICKNESS",
                    help="with --cycle: voxel size of the short-axis stacks, mm")  # fmt: skip
-    g.add_argument("--tagging", action="store_true",
-                   help="with --images cine: tagging lines 7 mm apart, moving with the wall")  # fmt: skip
+    g.add_argument("--tagging", nargs="?", const="2d", choices=("2d", "3d"), default=None,
+                   help="with --images cine: tagging lines 7 mm apart, moving with the wall: "
+                        "planes along the long axis (2d, the default) or, with 3d, also "
+                        "across it (seen with a through-plane voxel finer than 7 mm)")  # fmt: skip
+
+
+def _tag_grid(kind: str | None):
+    """The :class:`~ladders.study.imaging.TagGrid` of ``--tagging [2d|3d]`` (None without)."""
+    from ..imaging.cine import TagGrid
+
+    return None if kind is None else TagGrid(axes=(0, 1, 2) if kind == "3d" else (0, 1))
 
 
 def run_cycle_cohort(args, abnormality) -> int:
@@ -74,7 +83,6 @@ def run_cycle_cohort(args, abnormality) -> int:
     from pathlib import Path
 
     from ..errors import CohortError
-    from ..imaging.cine import TagGrid
     from ..population import make_two_group_cycles, write_cycle_cohort
 
     given = [o for o in _EXCLUSIVE if getattr(args, o, None) not in (None, False, 0.0)]
@@ -90,7 +98,7 @@ def run_cycle_cohort(args, abnormality) -> int:
         cycles = make_two_group_cycles(args.subjects, abnormality, args.cycle, 0.35,
                                        args.vertices, args.seed, args.patients)  # fmt: skip
         folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
-                                    tagging=TagGrid() if args.tagging else None,
+                                    tagging=_tag_grid(args.tagging),
                                     landmarks=args.landmarks)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None

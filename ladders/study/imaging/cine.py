@@ -63,6 +63,10 @@ class TagGrid:
     The intensity is multiplied by ``m(x) m(y)``, with
     ``m(s) = 1 - depth exp(-d(s)^2 / (2 sigma^2))``, ``d`` the distance to the nearest
     line and ``sigma = width / 2.355`` (``width`` is the full width at half depth).
+    With ``axes=(0, 1, 2)`` the planes ``z = k spacing`` across the long axis are added
+    (``m(x) m(y) m(z)``): 3-D tagging, whose planes move with the shortening along the
+    long axis, as the in-plane grid does not; they show only in images whose
+    through-plane resolution is finer than ``spacing``.
 
     Attributes
     ----------
@@ -72,11 +76,15 @@ class TagGrid:
         Full width at half depth of a line, mm (default 1.5).
     depth : float
         Intensity removed at a line's centre, in ``[0, 1]`` (default 0.8).
+    axes : tuple of int
+        The ED frame's axes across which the tag planes lie: ``(0, 1)`` (default, a grid
+        in the short-axis planes) or ``(0, 1, 2)`` (3-D tagging); distinct, in 0..2.
     """
 
     spacing: float = 7.0
     width: float = 1.5
     depth: float = 0.8
+    axes: tuple = (0, 1)
 
     def __post_init__(self):
         for name in ("spacing", "width"):
@@ -85,14 +93,25 @@ class TagGrid:
                 raise ImageError(f"tagging.{name}: expected a length > 0 mm, got {value!r}")
         if not (np.isfinite(self.depth) and 0.0 <= self.depth <= 1.0):
             raise ImageError(f"tagging.depth: expected a fraction in [0, 1], got {self.depth!r}")
+        try:
+            axes = tuple(self.axes)
+        except TypeError:
+            axes = None
+        if (not axes or len(set(axes)) != len(axes)
+                or not all(isinstance(a, int | np.integer) and not isinstance(a, bool)
+                           and 0 <= a <= 2 for a in axes)):  # fmt: skip
+            raise ImageError(f"tagging.axes: expected distinct axes among 0, 1, 2, got "
+                             f"{self.axes!r}")  # fmt: skip
+        object.__setattr__(self, "axes", tuple(int(a) for a in axes))
 
 
 def tag_pattern(points, tagging: TagGrid) -> np.ndarray:
-    """The tag modulation ``m(x) m(y)`` at ED points, shape ``points.shape[:-1]``, in ``[0, 1]``."""
+    """The tag modulation (``m(x) m(y)``, times ``m(z)`` with 3-D tagging) at ED points,
+    shape ``points.shape[:-1]``, in ``[0, 1]``."""
     x = np.asarray(points, dtype=float)
     sigma = tagging.width / (2.0 * np.sqrt(2.0 * np.log(2.0)))
     out = np.ones(x.shape[:-1])
-    for axis in (0, 1):
+    for axis in tagging.axes:
         s = x[..., axis] / tagging.spacing
         d = (s - np.round(s)) * tagging.spacing
         out = out * (1.0 - tagging.depth * np.exp(-0.5 * (d / sigma) ** 2))
