@@ -125,8 +125,9 @@ def run_route(work: Path, name: str, images: str, n: int, n_frames: int, jobs: i
     return seconds
 
 
-def _tracked(root: Path, c):
-    sequences = read_tracked_frames(root / "tracked")
+def _tracked(root: Path, c, folder: str = "tracked"):
+    """Names and frames ``(n, T, k, 3)`` of the subjects tracked into ``root / folder``."""
+    sequences = read_tracked_frames(root / folder)
     names = [s for s in c.names if s in sequences]
     return names, np.stack([[read_mesh(p)[0] for p in sequences[s]] for s in names])
 
@@ -255,25 +256,24 @@ def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, se
     out = []
     for name in cohorts:
         c = _cycles(name, n, n_frames)
-        motions = [("true frames (meshes in correspondence)", None, c.names, c.frames, "truth")]
+        atlas = c.data.cohort.atlas
+        motions = [("true frames (meshes in correspondence)", None,
+                    CycleMotion(c.names, c.frames - c.frames[:, :1], atlas, c.faces), "truth")]  # fmt: skip
         for kind in images:
             root = work / f"{name}_{kind}"
             if (root / "tracked").is_dir():
                 names, frames = _tracked(root, c)
                 errors = _errors(c, names, frames)
-                motions.append((f"{kind} cine, tracked", errors, names, frames,
+                motions.append((f"{kind} cine, tracked", errors,
+                                CycleMotion(tuple(names), frames - frames[:, :1], atlas, c.faces),
                                 _fingerprint(root / "tracked")))  # fmt: skip
                 if transport and (root / "cycle_study" / "cycle_study.json").is_file():
-                    moved = load_cycle_motion(root / "cycle_study")
+                    # already on the atlas: the study's transported frames
                     motions.append((f"{kind} cine, tracked, pole ladder alpha^2 = {ALPHA2:g}",
-                                    errors, moved, None, _fingerprint(root / "cycle_study")))  # fmt: skip
-        for label, errors, names, frames, source in motions:
+                                    errors, load_cycle_motion(root / "cycle_study"),
+                                    _fingerprint(root / "cycle_study")))  # fmt: skip
+        for label, errors, motion, source in motions:
             key = f"{name}|{label}|{n}|{n_frames}|{permutations}|{repetitions}|{seed}|{source}|{tests}"
-            if frames is None:  # already on the atlas: the study's transported frames
-                motion, names = names, names.subjects
-            else:
-                motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
-                                     c.faces)  # fmt: skip
             if key not in cache:
                 index = [tuple(COHORTS).index(name), 1 + list(IMAGES).index(label.split()[0])
                          if errors is not None else 0]  # fmt: skip
@@ -281,7 +281,7 @@ def rows(work: Path, cohorts, images, n, n_frames, permutations, repetitions, se
                     index.append(int("pole ladder" in label))
                 rng = np.random.default_rng([seed, *index])
                 scores = _scores(motion, c, permutations, repetitions, rng, fwhm, transport)
-                cache[key] = [name, label, len(names), errors, *scores]
+                cache[key] = [name, label, len(motion.subjects), errors, *scores]
                 cache_path.write_text(json.dumps(cache, indent=1))
             effects = [_peak_effect(motion, c)]
             if fwhm is not None:

@@ -31,9 +31,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_cycle_cine as cine  # noqa: E402
 from generated_tables import machine, publish  # noqa: E402
 
-from ladders.study.meshes.mesh_io import read_mesh  # noqa: E402
 from ladders.study.population import write_cycle_cohort  # noqa: E402
-from ladders.study.sequences import CycleMotion, curve_peaks, read_tracked_frames  # noqa: E402
+from ladders.study.sequences import CycleMotion, curve_peaks  # noqa: E402
 from ladders.study.tracking import CineTrackingSettings, track_cohort  # noqa: E402
 
 COHORT = "hypokinesia_mild"
@@ -78,7 +77,7 @@ def rows(work: Path, images, masks, n, n_frames, permutations, repetitions) -> l
             folder = _folder(root, mask)
             if not folder.is_dir():
                 continue
-            names, frames = _read(folder, c)
+            names, frames = cine._tracked(root, c, folder.name)
             labels = np.array([c.patients[c.names.index(s)] for s in names])
             motion = CycleMotion(tuple(names), frames - frames[:, :1], c.data.cohort.atlas,
                                  c.faces)  # fmt: skip
@@ -92,12 +91,6 @@ def rows(work: Path, images, masks, n, n_frames, permutations, repetitions) -> l
                         cine._peak_effect(motion, c)))  # fmt: skip
             print(out[-1], flush=True)
     return out
-
-
-def _read(folder: Path, c):
-    sequences = read_tracked_frames(folder)
-    names = [s for s in c.names if s in sequences]
-    return names, np.stack([[read_mesh(p)[0] for p in sequences[s]] for s in names])
 
 
 def _table(rows, permutations, repetitions) -> str:
