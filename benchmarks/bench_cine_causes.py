@@ -14,8 +14,8 @@ chain of ``reference="ed"``). Three questions, each answered against the truth:
    Its error at the ED vertices, split along the true ES normals and across them, and
    its twist error, are the representation's floor.
 2. **Does the metric prefer the truth?** The mean squared difference between the ED
-   frame and the ES frame pulled back by a map, over the voxels within 10 mm of the ED
-   mesh (linear interpolation): for the identity, the true motion and the tracked one
+   frame and the ES frame pulled back by a map, over the voxels the tracking's metric
+   samples (within ``mask_distance`` of the ED mesh; linear interpolation): for the identity, the true motion and the tracked one
    (every such voxel centre tracked as a point), and the best B-spline of question 1.
 3. **What the tracking reached:** the same errors for the tracked vertices, and their
    error along the long axis (through the slices) and about it (circumferential).
@@ -106,9 +106,9 @@ def run() -> list[tuple]:
     fractions = cycle_fraction(np.arange(N_FRAMES) / N_FRAMES, es / N_FRAMES)
     affine, shape = grid(GRIDS["short-axis 1.5 x 1.5 x 8 mm"])
     voxels = voxel_centres(affine, shape)
-    near = voxels[cKDTree(ed).query(voxels)[0] < 10.0]
-    inverse = np.linalg.inv(affine[:3, :3])
     settings = replace(SETTINGS, reference="ed", combine="forward")
+    near = voxels[cKDTree(ed).query(voxels)[0] < settings.mask_distance]  # the metric's voxels
+    inverse = np.linalg.inv(affine[:3, :3])
     uniform = dataclasses.replace(params, contraction_heterogeneity=0.0)  # same ED shape
     cases = (("yes", TagGrid(), params, ("central_difference", "gaussian")),
              ("no", None, params, ("central_difference", "gaussian")),
@@ -165,7 +165,8 @@ def _table(rows) -> str:
         f"at ES; control points {SETTINGS.control_point_spacing:g} mm apart, sampling "
         f"{SETTINGS.sampling_percentage:g}, every frame registered to ED from its neighbour's "
         "fit. Metric: mean squared intensity difference between ED and ES pulled back, over "
-        "the voxels within 10 mm of the ED mesh."
+        f"the voxels within {SETTINGS.mask_distance:g} mm of the ED mesh (those the tracking's "
+        "metric samples)."
     )
     return note + "\n\n" + "\n".join(lines) + "\n"
 

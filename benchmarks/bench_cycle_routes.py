@@ -125,9 +125,10 @@ def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int, landmarks
     return seconds
 
 
-def _tracked(root: Path, c):
-    """Tracked frames ``(n, T, k, 3)`` in the atlas's frame and each subject's transform."""
-    sequences = read_tracked_frames(root / "tracked")
+def _tracked(root: Path, c, tracked: Path | None = None):
+    """Tracked frames ``(n, T, k, 3)`` in the atlas's frame and each subject's transform
+    (from ``root / "tracked"``, or from ``tracked``)."""
+    sequences = read_tracked_frames(root / "tracked" if tracked is None else tracked)
     names = [s for s in c.names if s in sequences]
     frames = np.stack([[read_mesh(p)[0] for p in sequences[s]] for s in names])
     matrices = []

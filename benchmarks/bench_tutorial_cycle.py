@@ -34,9 +34,9 @@ COMMANDS = (
     ("put every ED mesh in the atlas's vertex correspondence",
      "symladders correspond --atlas cohort/atlas.vtk --meshes meshes "
      "--landmarks cohort/landmarks.csv -o corresponded --no-progress"),
-    ("follow each ED mesh through its 25 frames",
-     "symladders track corresponded cohort/images --label 1 --refine-ed -o tracked "
-     "--no-progress"),
+    ("follow each ED mesh through its 25 frames, the base's height from the valve planes",
+     "symladders track corresponded cohort/images --label 1 --refine-ed "
+     "--cut-planes cohort/valve_planes.csv -o tracked --no-progress"),
     ("transport every frame's motion to the atlas (pole ladder)",
      "symladders cycle-study tracked --atlas cohort/atlas.vtk --alpha2 100 -o cycle_study "
      "--no-progress"),
@@ -71,7 +71,7 @@ def far_vertices(work: Path, threshold: float = 3.0, band: float = 0.1) -> tuple
     atlas's height; returns (all, apical, basal)."""
     from ladders.study.meshes import read_mesh
     from ladders.study.preparation.alignment import SimilarityTransform
-    from ladders.study.preparation.surface_distance import _on_rim
+    from ladders.study.preparation.surface_distance import on_rim
     from ladders.study.surface_queries import closest_points
 
     counts = np.zeros(3, dtype=int)
@@ -82,7 +82,7 @@ def far_vertices(work: Path, threshold: float = 3.0, band: float = 0.1) -> tuple
             cv, cf = read_mesh(work / "corresponded" / f"{record.stem}_{phase}.vtk")
             moved = transform.apply(v)
             closest, distance, _ = closest_points(moved, cv, cf)
-            far = (distance > threshold) & ~_on_rim(closest, cv, cf)
+            far = (distance > threshold) & ~on_rim(closest, cv, cf)
             low, high = cv[:, 2].min(), cv[:, 2].max()
             z = moved[far, 2]
             counts += [far.sum(), (z < low + band * (high - low)).sum(),

@@ -136,3 +136,24 @@ def test_bad_anchors_are_named(atlas):
         CorrespondenceSettings(anchor_weight=-0.1)
     with pytest.raises(ValueError, match="anchor"):
         CorrespondenceSettings(anchor="sideways")
+
+
+def test_pairs_beyond_the_rim_left_out_with_the_base_height_anchored(atlas):
+    """A rim ``gap`` mm below the base, the base's height along the axis anchored
+    (``anchor_direction``): with the pairs at the rim the fit's error grows with the gap
+    (the template is squeezed onto the rim); without them (``skip_rim``) it does not."""
+    cohort, points = atlas
+    base = (points[1:], apply_affine(AFFINE, points[1:]))  # the base-plane centre only
+    axis = np.array([0.0, 0.0, 1.0])
+    errors = {True: [], False: []}
+    for gap in (2.0, 8.0, 12.0):
+        (v, f), target = _cut_target(cohort, gap)
+        for skip in errors:
+            m = affine_icp(cohort.atlas, cohort.faces, v, f, anchors=base, anchor_direction=axis,
+                           skip_rim=skip)  # fmt: skip
+            errors[skip].append(_fit_error(m, cohort, target))
+    skipped, kept = np.array(errors[True]), np.array(errors[False])
+    print(f"fit error (mm) at gaps 2, 8, 12: with the rim's pairs {kept.round(2)}, without "
+          f"{skipped.round(2)}")  # fmt: skip
+    assert skipped.max() < 0.8 and np.ptp(skipped) < 0.35
+    assert kept[-1] > 2.0 * skipped[-1] and kept[-1] > kept[0] + 1.0

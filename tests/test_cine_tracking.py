@@ -10,6 +10,7 @@ errors measured with these settings and well below the motion itself.
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -455,6 +456,9 @@ def test_symladders_track_cine_moves_each_subject_as_track_cine_does(tmp_path, c
     for t in range(2):
         got, _ = read_mesh(out / "case" / f"frame_{t:02d}.vtk")
         np.testing.assert_allclose(got, expected[t], atol=1e-3)
+    # without --mask-distance the record carries the settings' default
+    record = json.loads((out / "case.json").read_text())
+    assert record["settings"]["mask_distance"] == CineTrackingSettings().mask_distance
     # --image-gradient reaches the registrations (ITK's Gaussian derivative)
     smoothed = tmp_path / "smoothed"
     argv_smoothed = [*argv[: argv.index("-o")], "-o", str(smoothed), *argv[argv.index("-o") + 2 :]]

@@ -44,6 +44,31 @@ def test_label_series_render_the_true_frames(cycles, tmp_path):
     assert np.argmin(volumes) == record["es_frame"]  # the cavity is smallest at ES
 
 
+def test_valve_planes_are_the_true_rims_and_the_track_table(cycles, tmp_path):
+    """``valve_planes.csv``: every frame's rim lies on its plane, the normal points away
+    from the apex, the plane descends in systole, and the table is ``--cut-planes``'s."""
+    from ladders.study.cli.track_cli import _read_planes
+    from ladders.study.population import valve_planes
+    from ladders.study.volume import boundary_vertices
+
+    folder = write_cycle_cohort(cycles, tmp_path, "none", 1.5, 8.0, frames=False)
+    table = _read_planes(folder / "valve_planes.csv")
+    assert list(table) == list(cycles.names)
+    rim = boundary_vertices(cycles.faces)
+    for i, name in enumerate(cycles.names):
+        planes = valve_planes(cycles.frames[i], cycles.faces)
+        assert list(table[name]) == [str(t) for t in range(len(cycles.fractions))]
+        assert np.allclose([table[name][str(t)] for t in range(len(planes))], planes, atol=1e-5)
+        for t, plane in enumerate(planes):
+            off = (cycles.frames[i, t, rim] - plane[:3]) @ plane[3:]
+            assert np.abs(off).max() < 1e-6 * np.ptp(cycles.frames[i, t])  # the rim is planar
+            assert ((cycles.frames[i, t] - plane[:3]) @ plane[3:]).max() < 1e-4  # apex side
+        es = int(np.argmax(cycles.fractions))
+        assert planes[es, 2] < planes[0, 2] - 5.0  # the base descends towards the apex
+    with pytest.raises(CohortError, match="frames: expected"):
+        valve_planes(cycles.frames[0, 0], cycles.faces)
+
+
 def test_cine_series_are_intensities_with_tagging(cycles, tmp_path):
     from ladders.study.imaging.cine import TagGrid
 

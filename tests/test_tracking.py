@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward
 from ladders.study.imaging import (
+    LabelImage,
     MeshingSettings,
     extract_surface,
     read_label_image,
@@ -330,3 +332,66 @@ def test_the_command_tracks_and_names_the_broken_subject(tmp_path, subject):
     assert status == 1 and "1 already done" in stdout
     status, _, stderr = run_cli("track", meshes, images, "-o", out)
     assert status == 2 and "--label" in stderr
+
+
+#: Short-axis slices for the valve-plane anchors: the base's height falls within a slice.
+SLICE = 8.0
+
+
+def _basal_bias(subject, tracked, es_fraction):
+    """Mean error along the long axis (mm) at ES of the basal tenth of the tracked vertices."""
+    truth = motion_forward(subject["params"], tracked[0], es_fraction)
+    height = subject["ed"][:, 2] / subject["params"].long_axis
+    return float((tracked[1] - truth)[height > 0.9, 2].mean())
+
+
+@pytest.fixture(scope="module")
+def slice_offsets(subject):
+    """ED and ES of the subject on stacks of 8 mm slices shifted by 0, 2, 4 and 6 mm: the
+    basal bias along the long axis at ES without and with the true valve planes."""
+    es = int(np.argmax(subject["fractions"]))
+    frames = (0, es)
+    planes = np.array([subject["planes"][str(t)] for t in frames])
+    ed = subject["ed"]
+    out = {"plain": [], "anchored": []}
+    for offset in (0.0, 2.0, 4.0, 6.0):
+        low = ed.min(0) - np.array([15.0, 15.0, 15.0 + offset])
+        affine = short_axis_affine(low, VOXEL, SLICE)
+        shape = tuple(int(n) for n in np.ceil((ed.max(0) + 6.0 - low) / [VOXEL, VOXEL, SLICE]))
+        surfaces = []
+        for t, plane in zip(frames, planes):
+            labels = render_labels(subject["params"], affine, shape, subject["fractions"][t])
+            settings = dataclasses.replace(MESHING, cut_plane=tuple(plane))
+            v, f, _ = extract_surface(LabelImage(labels, affine, Path("synthetic")), 1, settings)
+            surfaces.append((v, f))
+        for key, base in (("plain", None), ("anchored", planes)):
+            tracked = track_surfaces(ed, subject["faces"], surfaces, TrackingSettings(),
+                                     base_planes=base)  # fmt: skip
+            out[key].append(_basal_bias(subject, tracked.vertices, subject["fractions"][es]))
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def test_valve_planes_anchor_the_base_whatever_the_slices(slice_offsets):
+    """On 8 mm slices the rim of a frame's surface lies at a slice's edge, below the base:
+    without the valve planes in the fit the rim pulls the basal vertices down; with the
+    true plane of every frame the base follows its true height wherever the slices fall."""
+    plain, anchored = slice_offsets["plain"], slice_offsets["anchored"]
+    print(f"basal bias along the axis at ES (mm): plain {plain.round(2)}, anchored "
+          f"{anchored.round(2)}")  # fmt: skip
+    assert np.abs(plain).min() > 2.0
+    assert np.abs(anchored).max() < 1.0
+
+
+def test_bad_base_planes_are_named(subject, surfaces):
+    ed, faces = subject["ed"], subject["faces"]
+    good = np.array([subject["planes"][str(t)] for t in range(N_FRAMES)])
+    for planes, match in (
+        (good[:2], "expected one plane .* per frame"),
+        (np.where(np.arange(6) == 2, np.nan, good), "not finite"),
+        (np.c_[good[:, :3], np.zeros((N_FRAMES, 3))], "frame 0: the normal is zero"),
+    ):
+        with pytest.raises(ValueError, match="base_planes: " + match):
+            track_surfaces(ed, faces, surfaces, TrackingSettings(), base_planes=planes)
+    with pytest.raises(ValueError, match="base_planes: only with method='projection'"):
+        track_surfaces(ed, faces, surfaces, TrackingSettings(method="registration"),
+                       base_planes=good)  # fmt: skip

@@ -113,6 +113,7 @@ def run_cycle_cohort(args, abnormality) -> int:
     what = "no images" if args.images == "none" else f"{args.images}: {folder / 'images'}"
     if args.landmarks:
         what += f"; landmarks: {folder / 'landmarks.csv'}"
+    what += f"; valve planes: {folder / 'valve_planes.csv'}"
     print(f"{what}; true frames: {folder / 'frames'}; groups: {folder / 'groups.csv'}; "
           f"truth: {folder / 'planted_region.json'}, {folder / 'cycle.json'}")  # fmt: skip
     return 0

@@ -97,9 +97,10 @@ def add_track_parser(sub) -> None:
                    help="with --cine: register every frame to ED, started from its neighbour's "
                         "fit (ed, default), or consecutive frames composed forward and backward "
                         "(consecutive, as UK Biobank)")  # fmt: skip
-    p.add_argument("--mask-distance", type=nonnegative_float, default=10.0, metavar="MM",
+    p.add_argument("--mask-distance", type=nonnegative_float, default=None, metavar="MM",
                    help="with --cine and --reference ed: the metric samples the voxels within MM "
-                        "of an ED vertex (0: the whole image)")  # fmt: skip
+                        "of an ED vertex (default: CineTrackingSettings.mask_distance, 4 mm; "
+                        "0: the whole image)")  # fmt: skip
     p.add_argument("--image-gradient", choices=("central_difference", "gaussian"),
                    default="central_difference",
                    help="with --cine: the moving image's gradient in the metric's derivative: "
@@ -133,7 +134,9 @@ def add_track_parser(sub) -> None:
     p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
                    help="CSV with the columns image,x,y,z,nx,ny,nz[,frame]: the valve plane of a "
                         "subject (image: its name or its series' file name), for one frame or, "
-                        "without a frame, for all")  # fmt: skip
+                        "without a frame, for all; a plane for every frame (e.g. the cohort's "
+                        "valve_planes.csv) also anchors the base's height in the projection's "
+                        "affine fits")  # fmt: skip
     p.add_argument("--jobs", type=jobs_count, default=2, help="subjects tracked in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(run=run_track_command, output_is_file=False)
@@ -154,7 +157,9 @@ def run_track_command(args) -> int:
                 control_point_spacing=args.control_point_spacing,
                 iterations=max(1, args.iterations),
                 reference=args.reference,
-                mask_distance=args.mask_distance or None,
+                mask_distance=CineTrackingSettings.mask_distance
+                if args.mask_distance is None
+                else args.mask_distance or None,
                 image_gradient=args.image_gradient,
                 jobs=(os.cpu_count() or 1)
                 if args.registration_jobs == -1

@@ -64,7 +64,13 @@ from .cycle_cohort import (
     make_two_group_cycles,
     two_group_cycles,
 )
-from .cycle_images import IMAGE_KINDS, cycle_grid, write_cycle_cohort
+from .cycle_images import (
+    IMAGE_KINDS,
+    VALVE_PLANES_FILE,
+    cycle_grid,
+    valve_planes,
+    write_cycle_cohort,
+)
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups, normalize_motion
 from .ideal_transport import (
     MOTION_PARAMETERS,
@@ -148,6 +154,8 @@ __all__ = [
     "make_two_group_cycles",
     "IMAGE_KINDS",
     "cycle_grid",
+    "valve_planes",
+    "VALVE_PLANES_FILE",
     "write_cycle_cohort",
     "two_group_cycles",
     "AnatomyShift",

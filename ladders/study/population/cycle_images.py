@@ -14,6 +14,9 @@
                                   the true surfaces of every frame, in the atlas's
                                   correspondence (what ``symladders track`` estimates)
     <folder>/cycle.json           frames, ES frame, the grid and what was rendered
+    <folder>/valve_planes.csv     the valve plane of every subject's every frame (the plane
+                                  of the true surface's rim, its normal away from the
+                                  apex), the table ``symladders track --cut-planes`` reads
     <folder>/landmarks.csv        with ``landmarks=True``: the apex, base-plane centre and
                                   septal point of the atlas (row ``atlas``) and of every
                                   subject's ED frame, the table ``symladders correspond
@@ -28,6 +31,7 @@ meshes and the meshes made from the ED images.
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -39,13 +43,60 @@ from ..imaging.voxelize import short_axis_affine
 from ..meshes.mesh_io import write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from ..preparation.synthetic_landmarks import synthetic_landmarks
+from ..volume import boundary_vertices
 from .two_groups import write_two_group_cohort
 
-__all__ = ["IMAGE_KINDS", "cycle_grid", "write_cycle_cohort"]
+__all__ = ["IMAGE_KINDS", "VALVE_PLANES_FILE", "cycle_grid", "valve_planes", "write_cycle_cohort"]
+
+#: The per-frame valve planes :func:`write_cycle_cohort` writes (``--cut-planes`` format).
+VALVE_PLANES_FILE = "valve_planes.csv"
 
 #: What :func:`write_cycle_cohort` renders into ``images/``.
 IMAGE_KINDS = ("labels", "cine", "none")
 _MARGIN, _ABOVE_BASE = 15.0, 8.0
+
+
+def valve_planes(frames, faces) -> np.ndarray:
+    """The plane of the rim (the valve plane) of every frame of an open surface.
+
+    Parameters
+    ----------
+    frames : array, shape (n_frames, k, 3)
+        The surface at every frame (one triangulation, e.g. a subject's true frames).
+    faces : array of int, shape (f, 3)
+        Its triangles, with one boundary loop (the rim at the base).
+
+    Returns
+    -------
+    ndarray, shape (n_frames, 6)
+        ``(x, y, z, nx, ny, nz)`` per frame: the rim's centroid and the unit normal of
+        its least-squares plane, pointing away from the surface's centroid (the side
+        ``MeshingSettings.cut_plane`` removes).
+    """
+    frames = np.asarray(frames, dtype=float)
+    rim = boundary_vertices(faces)
+    if frames.ndim != 3 or frames.shape[-1] != 3 or len(rim) < 3:
+        raise CohortError(
+            f"frames: expected (n_frames, k, 3) of an open surface, got {frames.shape} with "
+            f"{len(rim)} rim vertices"
+        )
+    out = np.empty((len(frames), 6))
+    for t, v in enumerate(frames):
+        centre = v[rim].mean(axis=0)
+        normal = np.linalg.svd(v[rim] - centre)[2][-1]
+        if np.dot(centre - v.mean(axis=0), normal) < 0:
+            normal = -normal
+        out[t] = np.r_[centre, normal]
+    return out
+
+
+def _write_planes(path: Path, names, frames, faces) -> None:
+    rows = [["image", "frame", "x", "y", "z", "nx", "ny", "nz"]]
+    for name, subject in zip(names, frames):
+        rows += [[name, t, *(f"{x:.6f}" for x in plane)]
+                 for t, plane in enumerate(valve_planes(subject, faces))]  # fmt: skip
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        csv.writer(fh, lineterminator="\n").writerows(rows)
 
 
 def cycle_grid(ed, in_plane: float = 1.5, thickness: float = 8.0) -> tuple[np.ndarray, tuple]:
@@ -116,6 +167,7 @@ def write_cycle_cohort(
         table.update((name, synthetic_landmarks(cycles.frames[i, 0]))
                      for i, name in enumerate(cycles.names))  # fmt: skip
         write_landmarks(folder / LANDMARKS_FILE, table)
+    _write_planes(folder / VALVE_PLANES_FILE, cycles.names, cycles.frames, cycles.faces)
     if images != "none":
         cycles.check_invertible()  # a folded motion cannot be rendered: say which subject
     if rng is None:
@@ -147,6 +199,7 @@ def write_cycle_cohort(
         "labels": {"background": 0, "blood_pool": 1, "myocardium": 2},
         "grids": grids,
         "landmarks": LANDMARKS_FILE if landmarks else None,
+        "valve_planes": VALVE_PLANES_FILE,
     }
     (folder / "cycle.json").write_text(json.dumps(record, indent=1), encoding="utf-8")
     return folder

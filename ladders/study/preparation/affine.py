@@ -39,6 +39,7 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_array, check_float, check_int
 
 from ..surface_queries import closest_points
+from .surface_distance import on_rim
 
 __all__ = ["affine_icp", "apply_affine"]
 
@@ -75,20 +76,26 @@ def _fit(source_h, target_pts, anchors=None, anchor_weight: float = 0.0, directi
     return out
 
 
-def _step(matrix, sv_h, sf, tv, tf, anchors=None, anchor_weight: float = 0.0, direction=None):
-    """One step: closest points both ways, the way back by barycentric coordinates."""
+def _step(matrix, sv_h, sf, tv, tf, anchors=None, anchor_weight: float = 0.0, direction=None,
+          skip_rim: bool = False):  # fmt: skip
+    """One step: closest points both ways, the way back by barycentric coordinates; with
+    ``skip_rim`` the pairs whose closest point lies on a rim are left out."""
     moved = apply_affine(matrix, sv_h[:, :3])
-    to_target = closest_points(moved, tv, tf)[0]
+    to_target, _, to_tri = closest_points(moved, tv, tf)
     points, _, tri = closest_points(tv, moved, sf)
     with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: left out
         bary = trimesh.triangles.points_to_barycentric(moved[sf[tri]], points)
     back = np.einsum("nk,nkd->nd", bary, sv_h[sf[tri]])
+    if skip_rim:  # NaN pairs are left out of the fit
+        to_target[on_rim(to_target, tv, tf, to_tri)] = np.nan
+        back[on_rim(points, moved, sf, tri)] = np.nan
     return _fit(np.r_[sv_h, back], np.r_[to_target, tv], anchors, anchor_weight, direction)
 
 
 def affine_icp(
     source_vertices, source_faces, target_vertices, target_faces, *, iterations: int = 30,
     tol: float = 1e-5, anchors=None, anchor_weight: float = 0.1, anchor_direction=None,
+    skip_rim: bool = False,
 ) -> np.ndarray:  # fmt: skip
     """The affine map bringing the source mesh onto the target surface (see the module).
 
@@ -110,6 +117,11 @@ def affine_icp(
     anchor_direction : array (3,), optional
         A direction of the target's frame (the long axis): only the anchors'
         components along it enter the fit, the three coordinates then solved together.
+    skip_rim : bool, default False
+        Leave out the pairs whose closest point lies on the other mesh's rim (its
+        boundary edges; Turk and Levoy, 1994): the part of a mesh that goes on beyond
+        the other's rim does not pull the fit onto that rim. Without anchors the rim
+        then no longer sets the stretch along a tube's axis.
 
     Returns
     -------
@@ -140,7 +152,7 @@ def affine_icp(
     extent = float(np.ptp(sv, axis=0).max()) or 1.0
     matrix = np.eye(4)
     for _ in range(iterations):
-        new = _step(matrix, sv_h, sf, tv, tf, anchors, anchor_weight, direction)
+        new = _step(matrix, sv_h, sf, tv, tf, anchors, anchor_weight, direction, skip_rim)
         change = np.abs(new - matrix)
         matrix = new
         if max(change[:3, :3].max(), change[:3, 3].max() / extent) < tol:

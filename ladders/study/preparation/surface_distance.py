@@ -25,7 +25,7 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from ..surface_queries import closest_points
 from ..volume import boundary_edges
 
-__all__ = ["surface_distances", "distances_to_surface"]
+__all__ = ["surface_distances", "distances_to_surface", "on_rim"]
 
 
 def distances_to_surface(points, vertices, faces) -> np.ndarray:
@@ -33,18 +33,33 @@ def distances_to_surface(points, vertices, faces) -> np.ndarray:
     return closest_points(points, vertices, faces)[1]
 
 
-def _on_rim(closest: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Which of the ``closest`` points (on the surface) lie on its boundary edges."""
+def on_rim(closest: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
+           triangles: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """Which of the ``closest`` points (on the surface) lie on its boundary edges.
+
+    ``triangles`` (optional, the triangle each point lies on, as
+    :func:`~ladders.study.surface_queries.closest_points` returns it): only the points on
+    a triangle with a vertex on the boundary are tested."""
     edges = boundary_edges(faces)
+    out = np.zeros(len(closest), dtype=bool)
     if len(edges) == 0 or len(closest) == 0:
-        return np.zeros(len(closest), dtype=bool)
+        return out
+    test = np.arange(len(closest))
+    if triangles is not None:
+        rim = np.zeros(len(vertices), dtype=bool)
+        rim[edges.ravel()] = True
+        test = np.flatnonzero(rim[np.asarray(faces)[triangles]].any(axis=1))
+        if len(test) == 0:
+            return out
     a, b = vertices[edges[:, 0]], vertices[edges[:, 1]]
     ab = b - a
-    t = np.einsum("ned,ed->ne", closest[:, None, :] - a[None], ab) / np.einsum("ed,ed->e", ab, ab)
+    points = closest[test]
+    t = np.einsum("ned,ed->ne", points[:, None, :] - a[None], ab) / np.einsum("ed,ed->e", ab, ab)
     foot = a[None] + np.clip(t, 0.0, 1.0)[..., None] * ab[None]
-    gap = np.linalg.norm(closest[:, None, :] - foot, axis=2).min(axis=1)
+    gap = np.linalg.norm(points[:, None, :] - foot, axis=2).min(axis=1)
     scale = np.ptp(vertices, axis=0).max()
-    return gap <= 1e-9 * scale
+    out[test] = gap <= 1e-9 * scale
+    return out
 
 
 def surface_distances(
@@ -76,7 +91,7 @@ def surface_distances(
     if skip_beyond_rim:
         used = np.unique(fb)  # vertices of the second mesh's triangles
         beyond = np.zeros(len(vb), dtype=bool)
-        beyond[used] = _on_rim(closest[used], np.asarray(va, dtype=np.float64), fa)
+        beyond[used] = on_rim(closest[used], np.asarray(va, dtype=np.float64), fa)
         kept = np.zeros(len(vb), dtype=bool)
         kept[used] = ~beyond[used]
         out["beyond_rim_fraction"] = float(beyond[used].mean())

@@ -7,7 +7,8 @@ subject's label series in a folder of images (:func:`~.label_series.find_series`
 of the series as ``symladders mesh`` does
 (:func:`~ladders.study.imaging.surface_extraction.extract_surface`, with the
 subject's valve cut plane where one is given, per frame or for all frames), tracks
-the mesh through the frames (:func:`~.surface_tracking.track_surfaces`) and writes::
+the mesh through the frames (:func:`~.surface_tracking.track_surfaces`, the valve
+planes anchoring the base's height where every frame has its own) and writes::
 
     <output>/<subject>/frame_<kk>.vtk   the tracked mesh of every frame (the atlas's faces)
     <output>/<subject>.json             provenance: inputs' SHA-256, frames, settings,
@@ -170,8 +171,24 @@ def _series_hashes(source: Path) -> list[str]:
     return [file_sha256(p) for p in files]
 
 
+def _anchored(settings, planes) -> bool:
+    """Whether per-frame planes may anchor the affine fits (label series, projection)."""
+    return (
+        isinstance(settings, TrackingSettings)
+        and settings.method == "projection"
+        and any(k != "all" for k in planes or {})
+    )
+
+
+def _base_planes(planes, n_frames: int) -> np.ndarray | None:
+    """Every frame's own plane ``(n_frames, 6)``, or None when a frame has none."""
+    if not planes or not all(str(t) in planes for t in range(n_frames)):
+        return None
+    return np.array([planes[str(t)] for t in range(n_frames)], dtype=float)
+
+
 def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, planes) -> dict:
-    return {
+    out = {
         "ed_sha256": file_sha256(task.ed),
         "series_sha256": _series_hashes(task.series),
         "transform": task.transform,
@@ -179,6 +196,9 @@ def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, pla
         "settings": settings.key(),
         "cut_planes": planes,
     }
+    if _anchored(settings, planes):  # results of before the anchors are not reused
+        out["base_anchors"] = True
+    return out
 
 
 def _frame_name(t: int, n: int, ext: str) -> str:
@@ -246,7 +266,9 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
                 )
                 surfaces.append((v, f))
                 reports.append(report.as_dict())
-            tracked = track_surfaces(scanner, faces, surfaces, settings)
+            base = _base_planes(planes, series.n_frames) if _anchored(settings, planes) else None
+            record["base_anchors"] = base is not None
+            tracked = track_surfaces(scanner, faces, surfaces, settings, base_planes=base)
         _clear(output, task.subject, ext)
         for t in range(series.n_frames):
             frame = (
@@ -324,7 +346,10 @@ def track_cohort(
     cut_planes : dict, optional
         ``{subject or series file name: plane}`` with ``plane`` ``(x, y, z, nx, ny, nz)``
         in world mm for every frame, or ``{frame: plane}`` per frame (0-based; a key
-        ``"all"`` for the others).
+        ``"all"`` for the others). Where every frame of a subject has its own plane
+        (the valve plane moving with the base) and the method is the projection, the
+        planes also anchor the affine fits (:func:`~.surface_tracking.track_surfaces`'s
+        ``base_planes``; the record's ``base_anchors``).
     jobs : int, default 2
         Subjects tracked in parallel (joblib processes).
     progress : bool

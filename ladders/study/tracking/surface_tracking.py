@@ -36,6 +36,16 @@ periodic). The weighted mean of two points on a surface lies slightly off it, so
 the combination is projected back along its normals; the chain goes on from the
 combined result. The distance between the two results (``drift_rms``) is recorded.
 
+With ``base_planes`` (the valve plane of every frame, e.g. from long-axis views, or
+``symladders track --cut-planes`` with a plane per frame), every affine fit also
+brings the height of the source frame's plane to that of the target frame's (an
+anchor along the target plane's normal, :func:`~ladders.study.preparation.affine.affine_icp`'s
+``anchors``), and a vertex whose normal misses the surface (above a rim lower than the
+base) keeps its place instead of going to the rim's closest point. On short-axis
+stacks the rim of a frame's surface lies at a slice's edge, up to a slice below the
+base and by an amount that changes from frame to frame; without the planes that rim
+sets the longitudinal part of the affine fit (``docs/tracking.md``).
+
 What a surface cannot show is said in ``docs/tracking.md``: the motion along the wall
 (the twist about the long axis above all) is not in the surfaces, so the tracked
 vertices carry the motion across the wall and the affine part of the motion along it.
@@ -43,6 +53,7 @@ vertices carry the motion across the wall and the affine part of the motion alon
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -156,43 +167,85 @@ def _point_affine(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     return out
 
 
-def _onto(vertices, faces, tv, tf, settings: TrackingSettings):
-    """Each vertex along its normal onto the surface ``(tv, tf)``, with the settings' limits."""
-    return normal_wall_motion(vertices, faces, tv, tf, max_distance=settings.normal_max_distance,
-                              max_detour=settings.max_detour)  # fmt: skip
+def _onto(vertices, faces, tv, tf, settings: TrackingSettings, keep_missed: bool = False):
+    """Each vertex along its normal onto the surface ``(tv, tf)``, with the settings' limits;
+    with ``keep_missed`` a vertex whose normal misses the surface stays where it is."""
+    out = normal_wall_motion(vertices, faces, tv, tf, max_distance=settings.normal_max_distance,
+                             max_detour=settings.max_detour)  # fmt: skip
+    if keep_missed and not out.hit.all():
+        points = out.points.copy()
+        points[~out.hit] = vertices[~out.hit]
+        out = dataclasses.replace(out, points=points, distance=np.where(out.hit, out.distance, 0.0))
+    return out
 
 
-def _projection(start, faces, tv, tf, settings: TrackingSettings, guess=None):
+def _projection(start, faces, tv, tf, settings: TrackingSettings, guess=None, anchor=None):
     """The affine fit of ``start`` onto the surface, then along its normals onto it.
 
     ``guess`` (points corresponding to ``start``, e.g. the chain's result for a step
-    from ED) starts the affine fit at their least-squares affine map."""
+    from ED) starts the affine fit at their least-squares affine map. ``anchor``
+    ``(source plane, target plane)``, each ``(6,)`` (point, unit normal): the fit also
+    brings the source plane's point to the target plane's height along its normal."""
     warm = np.eye(4) if guess is None else _point_affine(start, guess)
     moved = apply_affine(warm, start)
+    extra = {}
+    if anchor is not None:
+        source, target = anchor
+        extra = {"anchors": (apply_affine(warm, source[None, :3]), target[None, :3]),
+                 "anchor_direction": target[3:], "skip_rim": True}  # fmt: skip
     matrix = affine_icp(moved, faces, tv, tf, iterations=settings.affine_iterations,
-                        tol=settings.affine_tol) @ warm  # fmt: skip
-    proj = _onto(apply_affine(matrix, start), faces, tv, tf, settings)
+                        tol=settings.affine_tol, **extra) @ warm  # fmt: skip
+    proj = _onto(apply_affine(matrix, start), faces, tv, tf, settings, anchor is not None)
     return proj.points, {"hit_fraction": float(proj.hit.mean())}
 
 
-def _registration(start, faces, tv, tf, settings: TrackingSettings, guess=None):
+def _registration(start, faces, tv, tf, settings: TrackingSettings, guess=None, anchor=None):
     """``start`` registered onto the surface (LDDMM, varifold), no rigid re-alignment."""
     out = correspond_mesh(start, faces, tv, tf, settings.correspondence,
                           transform=SimilarityTransform.identity())  # fmt: skip
     return out.vertices, {"converged": out.quality["converged"], "n_iter": out.quality["n_iter"]}
 
 
-def _step(start, faces, target, about, settings: TrackingSettings, frame: int, guess=None):
+def _step(start, faces, target, about, settings: TrackingSettings, frame: int, guess=None,
+          anchor=None):  # fmt: skip
     tv, tf, kept = _cropped(target, about, faces, settings, frame)
     move = _projection if settings.method == "projection" else _registration
-    points, info = move(start, faces, tv, tf, settings, guess)
+    points, info = move(start, faces, tv, tf, settings, guess, anchor)
     return points, {**info, "kept_faces": kept}, (tv, tf)
 
 
-def _combine(chain, direct, weight, faces, cropped, settings: TrackingSettings) -> np.ndarray:
+def _combine(chain, direct, weight, faces, cropped, settings: TrackingSettings,
+             keep_missed: bool = False) -> np.ndarray:  # fmt: skip
     """The weighted mean of two results on a surface, projected back onto it along its normals."""
     mean = (1.0 - weight) * chain + weight * direct
-    return _onto(mean, faces, *cropped, settings).points
+    return _onto(mean, faces, *cropped, settings, keep_missed).points
+
+
+def _planes(base_planes, n: int, settings: TrackingSettings) -> np.ndarray | None:
+    """``base_planes`` checked: ``(n, 6)`` points and unit normals, or None."""
+    if base_planes is None:
+        return None
+    if settings.method != "projection":
+        raise ValueError("track_surfaces: base_planes: only with method='projection'")
+    try:
+        planes = np.asarray(base_planes, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(
+            "track_surfaces: base_planes: expected numbers, shape (n_frames, 6)"
+        ) from None
+    if planes.shape != (n, 6):
+        raise ValueError(
+            f"track_surfaces: base_planes: expected one plane (x, y, z, nx, ny, nz) per frame, "
+            f"shape ({n}, 6), got {planes.shape}"
+        )
+    if not np.isfinite(planes).all():
+        raise ValueError("track_surfaces: base_planes: not finite (NaN or infinity)")
+    norms = np.linalg.norm(planes[:, 3:], axis=1)
+    if (norms == 0).any():
+        t = int(np.flatnonzero(norms == 0)[0])
+        raise ValueError(f"track_surfaces: base_planes: frame {t}: the normal is zero")
+    planes[:, 3:] /= norms[:, None]
+    return planes
 
 
 def _frames(frame_surfaces) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -215,8 +268,9 @@ def _frames(frame_surfaces) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def track_surfaces(
-    ed_vertices, faces, frame_surfaces, settings: TrackingSettings | None = None
-) -> TrackedSurfaces:
+    ed_vertices, faces, frame_surfaces, settings: TrackingSettings | None = None,
+    base_planes=None,
+) -> TrackedSurfaces:  # fmt: skip
     """Follow the ED mesh through the frames' surfaces (see the module).
 
     Parameters
@@ -229,6 +283,10 @@ def track_surfaces(
     frame_surfaces : sequence of (vertices (m_t, 3), faces (g_t, 3))
         The surface of every frame, any triangulation; frame 0 is end-diastole.
     settings : TrackingSettings, optional
+    base_planes : array, shape (n_frames, 6), optional
+        The valve plane of every frame, ``(x, y, z, nx, ny, nz)`` (a point and a normal,
+        in the frame of the surfaces): every affine fit brings the height of its source
+        frame's plane to its target frame's (see the module). Projection only.
 
     Returns
     -------
@@ -238,33 +296,39 @@ def track_surfaces(
     Raises
     ------
     ValueError
-        A bad mesh or surface, or a frame's surface that does not lie within
-        ``settings.crop_distance`` of the mesh moved onto it.
+        A bad mesh or surface, a frame's surface that does not lie within
+        ``settings.crop_distance`` of the mesh moved onto it, or bad ``base_planes``.
     """
     settings = settings or TrackingSettings()
     ed, faces = check_mesh(ed_vertices, faces, "track_surfaces: ED mesh")
     ed = np.asarray(ed, dtype=np.float64)
     surfaces = _frames(frame_surfaces)
     n = len(surfaces)
+    planes = _planes(base_planes, n, settings)
+    keep = planes is not None
     tracked = np.empty((n, len(ed), 3))
     quality = [
         {"step_rms": 0.0, **({"weight_ed": 0.0, "drift_rms": 0.0} if settings.refine_ed else {})}
     ]
     if settings.project_ed:
         tv, tf, kept = _cropped(surfaces[0], ed, faces, settings, 0)
-        onto = _onto(ed, faces, tv, tf, settings)
+        onto = _onto(ed, faces, tv, tf, settings, keep)
         quality[0].update(onto_surface_rms=_rms(onto.points - ed), hit_fraction=onto.hit_fraction,
                           kept_faces=kept)  # fmt: skip
         ed = onto.points
     tracked[0] = ed
     for t in range(1, n):
         previous = tracked[t - 1]
-        points, info, cropped = _step(previous, faces, surfaces[t], previous, settings, t)
+        chain_anchor = None if planes is None else (planes[t - 1], planes[t])
+        points, info, cropped = _step(previous, faces, surfaces[t], previous, settings, t,
+                                      anchor=chain_anchor)  # fmt: skip
         if settings.refine_ed:
-            direct, _, _ = _step(ed, faces, surfaces[t], points, settings, t, guess=points)
+            ed_anchor = None if planes is None else (planes[0], planes[t])
+            direct, _, _ = _step(ed, faces, surfaces[t], points, settings, t, guess=points,
+                                 anchor=ed_anchor)  # fmt: skip
             weight = combine_weight(t, n)
             info.update(weight_ed=weight, drift_rms=_rms(points - direct))
-            points = _combine(points, direct, weight, faces, cropped, settings)
+            points = _combine(points, direct, weight, faces, cropped, settings, keep)
         tracked[t] = points
         info["step_rms"] = _rms(points - previous)
         quality.append(info)
