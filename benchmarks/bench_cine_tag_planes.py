@@ -86,7 +86,8 @@ def _table(rows) -> str:
         f"The subject of `cine_causes`, {N_FRAMES} frames, noise 0.02, tracked to ES (every "
         f"frame registered to ED from its neighbour's fit); control points "
         f"{SETTINGS.control_point_spacing:g} mm apart, sampling "
-        f"{SETTINGS.sampling_percentage:g}, {SETTINGS.iterations} iterations per level; tag "
+        f"{SETTINGS.sampling_percentage:g}, {SETTINGS.iterations} iterations per level, the "
+        f"metric sampling the voxels within {SETTINGS.mask_distance:g} mm of the ED mesh; tag "
         "planes 7 mm apart. Errors at ES against the true motion, means over the 241 "
         "vertices."
     )

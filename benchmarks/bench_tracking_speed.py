@@ -12,7 +12,8 @@ atlas's correspondence, in the images' frame) is tracked through its series by
 * label series: every frame meshed, then projection with ``refine_ed`` (the
   command's ``--refine-ed``), timed for two subjects one after the other on one
   worker (time per subject on one core) and two at a time on the two cores
-  (throughput per subject);
+  (throughput per subject), without and with the cohort's true valve plane of every
+  frame (``--cut-planes``: the affine fits anchored, the pairs at a rim left out);
 * cine series: the B-spline registrations with the defaults of
   :class:`~ladders.study.tracking.CineTrackingSettings`, every frame registered to ED
   (the default ``reference="ed"``, two chains) and consecutive frames composed forward
@@ -38,7 +39,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from generated_tables import machine, publish  # noqa: E402
 
-from ladders.study.population import make_two_group_cycles, write_cycle_cohort  # noqa: E402
+from ladders.study.population import (  # noqa: E402
+    make_two_group_cycles,
+    valve_planes,
+    write_cycle_cohort,
+)
 from ladders.study.tracking import CineTrackingSettings, TrackingSettings, track_cohort  # noqa: E402
 
 TARGET = 60.0  # seconds for one subject of 25 frames on 2 cores
@@ -60,10 +65,18 @@ def _meshes(root: Path, subjects: list[str], folder: Path) -> Path:
     return folder
 
 
-def _timed(meshes, images, out, settings, jobs) -> tuple[float, int]:
+def _valve_planes(n_frames: int) -> dict:
+    """The cohort's true valve plane of every subject's every frame (``--cut-planes``)."""
+    c = make_two_group_cycles(n_subjects=2, n_frames=n_frames)
+    return {name: {str(t): list(p) for t, p in enumerate(valve_planes(c.frames[i], c.faces))}
+            for i, name in enumerate(c.names)}  # fmt: skip
+
+
+def _timed(meshes, images, out, settings, jobs, cut_planes=None) -> tuple[float, int]:
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
-    outcome = track_cohort(meshes, images, out, 1, settings, jobs=jobs, progress=False)
+    outcome = track_cohort(meshes, images, out, 1, settings, cut_planes=cut_planes, jobs=jobs,
+                           progress=False)  # fmt: skip
     seconds = time.perf_counter() - start
     if outcome.failed:
         raise RuntimeError(f"tracking failed: {outcome.failed}")
@@ -76,12 +89,15 @@ def run(work: Path, routes: list[str], n_frames: int) -> list[tuple[str, str, fl
         root = _cohort(work, "labels", n_frames)
         subjects = sorted(p.stem[:-3] for p in root.glob("*_ed.vtk"))
         meshes = _meshes(root, subjects, work / "labels_ed")
-        for jobs, label in ((1, "one worker (1 core), per subject"),
-                            (2, "two subjects at a time (2 cores), per subject")):  # fmt: skip
-            seconds, n = _timed(meshes, root / "images", work / "labels_tracked",
-                                TrackingSettings(refine_ed=True), jobs)  # fmt: skip
-            rows.append(("label series, projection + refine_ed", label, seconds / n))
-            print(rows[-1], flush=True)
+        planes = _valve_planes(n_frames)
+        for route, cut in (("label series, projection + refine_ed", None),
+                           ("label series, projection + refine_ed + valve planes", planes)):  # fmt: skip
+            for jobs, label in ((1, "one worker (1 core), per subject"),
+                                (2, "two subjects at a time (2 cores), per subject")):  # fmt: skip
+                seconds, n = _timed(meshes, root / "images", work / "labels_tracked",
+                                    TrackingSettings(refine_ed=True), jobs, cut)  # fmt: skip
+                rows.append((route, label, seconds / n))
+                print(rows[-1], flush=True)
     if "cine" in routes:
         root = _cohort(work, "cine", n_frames)
         subject = sorted(p.stem[:-3] for p in root.glob("*_ed.vtk"))[0]

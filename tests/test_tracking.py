@@ -303,6 +303,7 @@ def test_track_cohort_records_failures_and_resumes(tmp_path, subject):
     record = json.loads((out / "good.json").read_text())
     assert record["status"] == "ok" and len(record["quality"]) == 3 and record["versions"]
     assert record["fingerprint"]["series_sha256"] and record["settings"]["method"] == "projection"
+    assert record["base_anchors"] is True  # a plane for every frame: the base's height anchored
     csv = (out / "tracking.csv").read_text().splitlines()
     assert csv[0] == "subject,status,frames,mean_distance,error" and len(csv) == 4
     again = track_cohort(

@@ -40,8 +40,9 @@ With ``base_planes`` (the valve plane of every frame, e.g. from long-axis views,
 ``symladders track --cut-planes`` with a plane per frame), every affine fit also
 brings the height of the source frame's plane to that of the target frame's (an
 anchor along the target plane's normal, :func:`~ladders.study.preparation.affine.affine_icp`'s
-``anchors``), and a vertex whose normal misses the surface (above a rim lower than the
-base) keeps its place instead of going to the rim's closest point. On short-axis
+``anchors``) and leaves out the pairs whose closest point lies on a rim (``skip_rim``),
+and a vertex whose normal misses the surface (above a rim lower than the base) keeps
+its place instead of going to the rim's closest point. On short-axis
 stacks the rim of a frame's surface lies at a slice's edge, up to a slice below the
 base and by an amount that changes from frame to frame; without the planes that rim
 sets the longitudinal part of the affine fit (``docs/tracking.md``).
