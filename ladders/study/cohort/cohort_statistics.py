@@ -15,17 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..volume import boundary_vertices  # re-exported: the mesh's rim
 from .cohort import Cohort, CohortError
 
 __all__ = ["CohortStatistics", "cohort_statistics", "boundary_vertices", "cavity_volume"]
-
-
-def boundary_vertices(faces: np.ndarray) -> np.ndarray:
-    """Indices of the vertices on the mesh boundary (edges used by one face only), sorted."""
-    faces = np.asarray(faces)
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    unique, counts = np.unique(edges, axis=0, return_counts=True)
-    return np.unique(unique[counts == 1])
 
 
 def cavity_volume(vertices: np.ndarray, faces: np.ndarray, base: np.ndarray) -> float:
