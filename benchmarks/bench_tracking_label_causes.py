@@ -47,8 +47,8 @@ from generated_tables import machine, publish  # noqa: E402
 from ladders.study.cohort import SyntheticLVModel, motion_forward  # noqa: E402
 from ladders.study.meshes.mesh_io import read_mesh  # noqa: E402
 from ladders.study.population import (  # noqa: E402
+    cycle_valve_planes,
     make_two_group_cycles,
-    valve_planes,
     write_cycle_cohort,
 )
 from ladders.study.sequences import CycleMotion, read_tracked_frames  # noqa: E402
@@ -82,12 +82,6 @@ def _folder(work: Path, variant: str) -> Path:
     return work / variant.replace("'", "").replace(",", "").replace(" ", "_")
 
 
-def cut_planes(c) -> dict:
-    """Every subject's true valve plane at every frame, as ``track_cohort`` reads them."""
-    return {name: {str(t): list(p) for t, p in enumerate(valve_planes(c.frames[i], c.faces))}
-            for i, name in enumerate(c.names)}  # fmt: skip
-
-
 def _track(meshes: Path, images: Path, out: Path, planes, jobs: int, label: str) -> float:
     start = time.perf_counter()
     outcome = track_cohort(meshes, images, out, 1, TrackingSettings(refine_ed=True),
@@ -113,7 +107,7 @@ def run_variant(work: Path, variant: str, n: int, n_frames: int, jobs: int) -> d
     seconds["track"] = _track(root / "cohort", images, root / "tracked", None, jobs, variant)
     if not VARIANTS[variant]:
         seconds["track_planes"] = _track(root / "cohort", images, root / "tracked_planes",
-                                         cut_planes(c), jobs, f"{variant}, valve planes")  # fmt: skip
+                                         cycle_valve_planes(c), jobs, f"{variant}, valve planes")  # fmt: skip
     return seconds
 
 
@@ -122,7 +116,7 @@ def run_route(work: Path, routes: Path, n: int, n_frames: int, jobs: int) -> flo
     c = _cycles("the cohort's motion", n, n_frames)
     root = routes / f"{COHORT}_landmarks"
     return _track(root / "corresponded", root / "cohort" / "images", work / "route_planes",
-                  cut_planes(c), jobs, "route, valve planes")  # fmt: skip
+                  cycle_valve_planes(c), jobs, "route, valve planes")  # fmt: skip
 
 
 def errors(c, names, frames, matrices) -> dict:

@@ -40,8 +40,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from generated_tables import machine, publish  # noqa: E402
 
 from ladders.study.population import (  # noqa: E402
+    cycle_valve_planes,
     make_two_group_cycles,
-    valve_planes,
     write_cycle_cohort,
 )
 from ladders.study.tracking import CineTrackingSettings, TrackingSettings, track_cohort  # noqa: E402
@@ -65,13 +65,6 @@ def _meshes(root: Path, subjects: list[str], folder: Path) -> Path:
     return folder
 
 
-def _valve_planes(n_frames: int) -> dict:
-    """The cohort's true valve plane of every subject's every frame (``--cut-planes``)."""
-    c = make_two_group_cycles(n_subjects=2, n_frames=n_frames)
-    return {name: {str(t): list(p) for t, p in enumerate(valve_planes(c.frames[i], c.faces))}
-            for i, name in enumerate(c.names)}  # fmt: skip
-
-
 def _timed(meshes, images, out, settings, jobs, cut_planes=None) -> tuple[float, int]:
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
@@ -89,7 +82,7 @@ def run(work: Path, routes: list[str], n_frames: int) -> list[tuple[str, str, fl
         root = _cohort(work, "labels", n_frames)
         subjects = sorted(p.stem[:-3] for p in root.glob("*_ed.vtk"))
         meshes = _meshes(root, subjects, work / "labels_ed")
-        planes = _valve_planes(n_frames)
+        planes = cycle_valve_planes(make_two_group_cycles(n_subjects=2, n_frames=n_frames))
         for route, cut in (("label series, projection + refine_ed", None),
                            ("label series, projection + refine_ed + valve planes", planes)):  # fmt: skip
             for jobs, label in ((1, "one worker (1 core), per subject"),

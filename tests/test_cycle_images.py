@@ -48,12 +48,17 @@ def test_valve_planes_are_the_true_rims_and_the_track_table(cycles, tmp_path):
     """``valve_planes.csv``: every frame's rim lies on its plane, the normal points away
     from the apex, the plane descends in systole, and the table is ``--cut-planes``'s."""
     from ladders.study.cli.track_cli import _read_planes
-    from ladders.study.population import valve_planes
+    from ladders.study.population import cycle_valve_planes, valve_planes
     from ladders.study.volume import boundary_vertices
 
     folder = write_cycle_cohort(cycles, tmp_path, "none", 1.5, 8.0, frames=False)
     table = _read_planes(folder / "valve_planes.csv")
     assert list(table) == list(cycles.names)
+    given = cycle_valve_planes(cycles)  # what track_cohort takes in Python
+    assert list(given) == list(table)
+    for name in table:
+        assert list(given[name]) == list(table[name])
+        assert np.allclose(list(given[name].values()), list(table[name].values()), atol=1e-5)
     rim = boundary_vertices(cycles.faces)
     for i, name in enumerate(cycles.names):
         planes = valve_planes(cycles.frames[i], cycles.faces)

@@ -68,6 +68,7 @@ from .cycle_images import (
     IMAGE_KINDS,
     VALVE_PLANES_FILE,
     cycle_grid,
+    cycle_valve_planes,
     valve_planes,
     write_cycle_cohort,
 )
@@ -155,6 +156,7 @@ __all__ = [
     "IMAGE_KINDS",
     "cycle_grid",
     "valve_planes",
+    "cycle_valve_planes",
     "VALVE_PLANES_FILE",
     "write_cycle_cohort",
     "two_group_cycles",

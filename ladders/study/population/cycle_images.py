@@ -46,7 +46,14 @@ from ..preparation.synthetic_landmarks import synthetic_landmarks
 from ..volume import boundary_vertices
 from .two_groups import write_two_group_cohort
 
-__all__ = ["IMAGE_KINDS", "VALVE_PLANES_FILE", "cycle_grid", "valve_planes", "write_cycle_cohort"]
+__all__ = [
+    "IMAGE_KINDS",
+    "VALVE_PLANES_FILE",
+    "cycle_grid",
+    "cycle_valve_planes",
+    "valve_planes",
+    "write_cycle_cohort",
+]
 
 #: The per-frame valve planes :func:`write_cycle_cohort` writes (``--cut-planes`` format).
 VALVE_PLANES_FILE = "valve_planes.csv"
@@ -90,11 +97,23 @@ def valve_planes(frames, faces) -> np.ndarray:
     return out
 
 
-def _write_planes(path: Path, names, frames, faces) -> None:
+def cycle_valve_planes(cycles) -> dict:
+    """Every subject's valve plane at every frame of a cohort through the cycle.
+
+    Returns ``{subject: {"0": plane, "1": plane, ...}}`` with ``plane`` the list
+    ``[x, y, z, nx, ny, nz]`` of :func:`valve_planes` of its true frames: the
+    ``cut_planes`` of :func:`~ladders.study.tracking.track_cohort` (what ``symladders
+    track --cut-planes valve_planes.csv`` reads).
+    """
+    return {name: {str(t): [float(x) for x in plane]
+                   for t, plane in enumerate(valve_planes(cycles.frames[i], cycles.faces))}
+            for i, name in enumerate(cycles.names)}  # fmt: skip
+
+
+def _write_planes(path: Path, cycles) -> None:
     rows = [["image", "frame", "x", "y", "z", "nx", "ny", "nz"]]
-    for name, subject in zip(names, frames):
-        rows += [[name, t, *(f"{x:.6f}" for x in plane)]
-                 for t, plane in enumerate(valve_planes(subject, faces))]  # fmt: skip
+    for name, frames in cycle_valve_planes(cycles).items():
+        rows += [[name, t, *(f"{x:.6f}" for x in plane)] for t, plane in frames.items()]
     with open(path, "w", newline="", encoding="utf-8") as fh:
         csv.writer(fh, lineterminator="\n").writerows(rows)
 
@@ -167,7 +186,7 @@ def write_cycle_cohort(
         table.update((name, synthetic_landmarks(cycles.frames[i, 0]))
                      for i, name in enumerate(cycles.names))  # fmt: skip
         write_landmarks(folder / LANDMARKS_FILE, table)
-    _write_planes(folder / VALVE_PLANES_FILE, cycles.names, cycles.frames, cycles.faces)
+    _write_planes(folder / VALVE_PLANES_FILE, cycles)
     if images != "none":
         cycles.check_invertible()  # a folded motion cannot be rendered: say which subject
     if rng is None:

@@ -39,6 +39,7 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_array, check_float, check_int
 
 from ..surface_queries import closest_points
+from ..volume import boundary_edges
 from .surface_distance import on_rim
 
 __all__ = ["affine_icp", "apply_affine"]
@@ -77,18 +78,19 @@ def _fit(source_h, target_pts, anchors=None, anchor_weight: float = 0.0, directi
 
 
 def _step(matrix, sv_h, sf, tv, tf, anchors=None, anchor_weight: float = 0.0, direction=None,
-          skip_rim: bool = False):  # fmt: skip
+          rims=None):  # fmt: skip
     """One step: closest points both ways, the way back by barycentric coordinates; with
-    ``skip_rim`` the pairs whose closest point lies on a rim are left out."""
+    ``rims`` (the boundary edges of the target and of the source) the pairs whose
+    closest point lies on a rim are left out."""
     moved = apply_affine(matrix, sv_h[:, :3])
     to_target, _, to_tri = closest_points(moved, tv, tf)
     points, _, tri = closest_points(tv, moved, sf)
     with np.errstate(divide="ignore", invalid="ignore"):  # degenerate triangles: left out
         bary = trimesh.triangles.points_to_barycentric(moved[sf[tri]], points)
     back = np.einsum("nk,nkd->nd", bary, sv_h[sf[tri]])
-    if skip_rim:  # NaN pairs are left out of the fit
-        to_target[on_rim(to_target, tv, tf, to_tri)] = np.nan
-        back[on_rim(points, moved, sf, tri)] = np.nan
+    if rims is not None:  # NaN pairs are left out of the fit
+        to_target[on_rim(to_target, tv, tf, to_tri, rims[0])] = np.nan
+        back[on_rim(points, moved, sf, tri, rims[1])] = np.nan
     return _fit(np.r_[sv_h, back], np.r_[to_target, tv], anchors, anchor_weight, direction)
 
 
@@ -151,8 +153,9 @@ def affine_icp(
     sv_h = np.c_[sv, np.ones(len(sv))]
     extent = float(np.ptp(sv, axis=0).max()) or 1.0
     matrix = np.eye(4)
+    rims = (boundary_edges(tf), boundary_edges(sf)) if skip_rim else None
     for _ in range(iterations):
-        new = _step(matrix, sv_h, sf, tv, tf, anchors, anchor_weight, direction, skip_rim)
+        new = _step(matrix, sv_h, sf, tv, tf, anchors, anchor_weight, direction, rims)
         change = np.abs(new - matrix)
         matrix = new
         if max(change[:3, :3].max(), change[:3, 3].max() / extent) < tol:

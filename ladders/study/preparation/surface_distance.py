@@ -34,13 +34,14 @@ def distances_to_surface(points, vertices, faces) -> np.ndarray:
 
 
 def on_rim(closest: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
-           triangles: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+           triangles: np.ndarray | None = None, edges: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """Which of the ``closest`` points (on the surface) lie on its boundary edges.
 
     ``triangles`` (optional, the triangle each point lies on, as
     :func:`~ladders.study.surface_queries.closest_points` returns it): only the points on
-    a triangle with a vertex on the boundary are tested."""
-    edges = boundary_edges(faces)
+    a triangle with a vertex on the boundary are tested. ``edges`` (optional): the
+    surface's :func:`~ladders.study.volume.boundary_edges`, when already known."""
+    edges = boundary_edges(faces) if edges is None else edges
     out = np.zeros(len(closest), dtype=bool)
     if len(edges) == 0 or len(closest) == 0:
         return out
