@@ -30,6 +30,7 @@ from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
 from .cycle_cli import add_cycle_parsers
 from .mesh_cli import add_mesh_parser
+from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
@@ -44,6 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    add_run_parser(sub)
     add_study_parser(sub)
     add_mesh_parser(sub)
     add_correspond_parser(sub)

@@ -1,0 +1,241 @@
+"""The inputs folder of ``symladders run``: the subjects table turned into what each command reads.
+
+The commands name a subject after its files (``<subject>_ed.nii.gz``,
+``<subject>.nii.gz``); a user's files rarely are (UK Biobank gives every subject a
+folder of files of the same names). :func:`write_route_inputs` writes, in
+``OUTPUT/inputs/``:
+
+* ``images/``: a link per image named after its subject (``<subject>.nii.gz`` for a
+  series, ``<subject>_ed.nii.gz`` and ``<subject>_es.nii.gz`` for two 3-D images),
+  read by ``symladders mesh``;
+* ``series/``: the series of the subjects tracked through the cycle, read by
+  ``symladders track`` (a link; a copy turned so that it starts at end-diastole when
+  the table's ED frame is not frame 0);
+* ``frames.csv``: the ED and ES frames the table gives (``subject,ed,es``);
+* ``landmarks.csv``: the landmarks the table gives;
+* ``planes.csv``: the valve planes of the settings, per image and frame, in the table
+  format ``symladders mesh --cut-planes`` reads.
+
+Each file is written only when its content changes, so that a rerun leaves the
+fingerprints of unchanged inputs as they were.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..files import atomic_write_text
+from ..preparation.landmarks import LANDMARK_COLUMNS
+from .subjects_table import SubjectsTable, SubjectsTableError
+
+__all__ = ["RouteInputs", "write_route_inputs", "image_suffix"]
+
+
+def image_suffix(path: Path) -> str:
+    """``.nii.gz`` or ``.nii``."""
+    return ".nii.gz" if path.name.lower().endswith(".nii.gz") else ".nii"
+
+
+class RouteInputs:
+    """The paths of the inputs folder (see the module)."""
+
+    def __init__(self, output: Path):
+        self.folder = Path(output) / "inputs"
+        self.images = self.folder / "images"
+        self.series = self.folder / "series"
+        self.frames = self.folder / "frames.csv"
+        self.landmarks = self.folder / "landmarks.csv"
+        self.planes = self.folder / "planes.csv"
+
+    def image_files(self) -> list[Path]:
+        """The links in ``images/`` (those of an earlier run too)."""
+        return sorted(self.images.iterdir()) if self.images.is_dir() else []
+
+    def image_paths(self, table: SubjectsTable) -> list[Path]:
+        """The links ``images/`` holds for ``table``, sorted."""
+        names = []
+        for e in table.entries:
+            if e.series is not None:
+                names.append(f"{e.subject}{image_suffix(e.series)}")
+            else:
+                names += [f"{e.subject}_{p}{image_suffix(t)}"
+                          for p, t in (("ed", e.ed_image), ("es", e.es_image))]  # fmt: skip
+        return [self.images / n for n in sorted(names)]
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    if path.is_file() and path.read_text(encoding="utf-8") == text:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, text)
+
+
+def _link(link: Path, target: Path) -> None:
+    if link.is_symlink() and Path(os.readlink(link)) == target:
+        return
+    if link.exists() or link.is_symlink():
+        link.unlink()
+    link.parent.mkdir(parents=True, exist_ok=True)
+    link.symlink_to(target)
+
+
+def _rolled(path: Path, target: Path, ed_frame: int) -> None:
+    """A copy of the series ``target`` turned so that frame ``ed_frame`` comes first."""
+    import nibabel as nib
+
+    from ..files import atomic_path
+
+    stamp = path.with_name(path.name + ".source")
+    key = f"{target}\n{os.stat(target).st_mtime_ns}\n{ed_frame}\n"
+    if path.is_file() and stamp.is_file() and stamp.read_text(encoding="utf-8") == key:
+        return
+    if path.is_symlink():
+        path.unlink()
+    img = nib.load(str(target))
+    data = np.roll(np.asanyarray(img.dataobj), -ed_frame, axis=3)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        nib.save(nib.Nifti1Image(data, img.affine, img.header), str(tmp))
+    atomic_write_text(stamp, key)
+
+
+def _csv(header, rows) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    return out.getvalue()
+
+
+def _planes(table: SubjectsTable, path: Path, inputs: RouteInputs) -> str:
+    """The settings' valve-plane table (subject, frame, x..nz) per image and frame."""
+    from .route_settings import RouteSettingsError
+
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except OSError as exc:
+        raise RouteSettingsError(f"valve planes {path}: cannot be read ({exc.strerror})") from None
+    reader = csv.DictReader(io.StringIO(text))
+    needed = ("subject", "x", "y", "z", "nx", "ny", "nz")
+    columns = [c.strip() for c in reader.fieldnames or []]
+    for column in needed:
+        if column not in columns:
+            raise SubjectsTableError(f"valve planes {path}, line 1, column {column!r}: missing")
+    extra = [c for c in columns if c not in (*needed, "frame")]
+    if extra:
+        raise SubjectsTableError(f"valve planes {path}, line 1, column {extra[0]!r}: unknown "
+                                 "column (expected subject, frame, x, y, z, nx, ny, nz)")  # fmt: skip
+    rows, seen = [], {}
+    known = {e.subject: e for e in table.entries}
+    for line, row in enumerate(reader, start=2):
+        row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
+        subject = row["subject"]
+        where = f"valve planes {path}, line {line}"
+        if subject not in known:
+            raise SubjectsTableError(f"{where}, column 'subject': {subject!r} is not in the "
+                                     "subjects table")  # fmt: skip
+        entry = known[subject]
+        frame = row.get("frame", "").lower()
+        try:
+            plane = [float(row[c]) for c in needed[1:]]
+        except ValueError:
+            bad = next(c for c in needed[1:] if not _number(row[c]))
+            raise SubjectsTableError(f"{where}, column {bad!r}: expected a number, got "
+                                     f"{row[bad]!r}") from None  # fmt: skip
+        if entry.series is None:
+            if frame not in ("ed", "es", ""):
+                raise SubjectsTableError(f"{where}, column 'frame': {subject!r} has two 3-D "
+                                         f"images: expected 'ed', 'es' or empty, got {frame!r}")  # fmt: skip
+            images = [f"{subject}_{p}{image_suffix(entry.ed_image)}"
+                      for p in (("ed", "es") if not frame else (frame,))]  # fmt: skip
+            targets = [(name, "") for name in images]
+        else:
+            name = f"{subject}{image_suffix(entry.series)}"
+            if frame in ("ed", "es"):
+                given = entry.ed_frame if frame == "ed" else entry.es_frame
+                if given is None and frame == "es":
+                    raise SubjectsTableError(f"{where}, column 'frame': 'es' needs the subject's "
+                                             "es_frame in the subjects table (or the frame's "
+                                             "number)")  # fmt: skip
+                frame = str(given or 0)
+            elif frame:
+                try:
+                    number = int(frame)
+                except ValueError:
+                    raise SubjectsTableError(f"{where}, column 'frame': expected a frame number, "
+                                             f"'ed', 'es' or empty, got {frame!r}") from None  # fmt: skip
+                if not 0 <= number < entry.n_frames:
+                    raise SubjectsTableError(f"{where}, column 'frame': frame {number} outside "
+                                             f"the series' {entry.n_frames} frames")  # fmt: skip
+            targets = [(name, frame)]
+        for name, f in targets:
+            key = (name, f)
+            if key in seen:
+                raise SubjectsTableError(f"{where}: a second plane for {subject!r} frame "
+                                         f"{f or 'all'} (first on line {seen[key]})")  # fmt: skip
+            seen[key] = line
+            rows.append([name, *(f"{x:.6g}" for x in plane), f])
+    return _csv(["image", "x", "y", "z", "nx", "ny", "nz", "frame"], rows)
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool) -> RouteInputs:
+    """Write the inputs folder of ``table`` (see the module); the paths written.
+
+    ``track``: the series of three frames or more go to ``series/``.
+    """
+    inputs = RouteInputs(output)
+    for e in table.entries:
+        if e.series is not None:
+            _link(inputs.images / f"{e.subject}{image_suffix(e.series)}", e.series)
+        else:
+            for phase, target in (("ed", e.ed_image), ("es", e.es_image)):
+                _link(inputs.images / f"{e.subject}_{phase}{image_suffix(target)}", target)
+    wanted = {p.name for p in inputs.image_paths(table)}
+    for path in inputs.image_files():  # a subject removed from the table
+        if path.name not in wanted:
+            path.unlink()
+    tracked = {}
+    if track:
+        for e in table.tracked:
+            path = inputs.series / f"{e.subject}{image_suffix(e.series)}"
+            if e.ed_frame:
+                _rolled(path, e.series, e.ed_frame)
+            else:
+                _link(path, e.series)
+            tracked[path.name] = True
+    if inputs.series.is_dir():
+        for path in sorted(inputs.series.iterdir()):
+            if path.name not in tracked and not path.name.endswith(".source"):
+                path.unlink()
+    frames = [(e.subject, e.ed_frame, e.es_frame) for e in table.entries
+              if e.series is not None and (e.ed_frame is not None or e.es_frame is not None)]  # fmt: skip
+    if frames:
+        rows = [(s, "" if ed is None else ed, "" if es is None else es) for s, ed, es in frames]
+        _write_if_changed(inputs.frames, _csv(["subject", "ed", "es"], rows))
+    elif inputs.frames.is_file():
+        inputs.frames.unlink()
+    if table.has_landmarks:
+        rows = [[e.subject, *(f"{x:.6g}" for x in e.landmarks.ravel())]
+                for e in table.entries if e.landmarks is not None]  # fmt: skip
+        _write_if_changed(inputs.landmarks, _csv(LANDMARK_COLUMNS, rows))
+    elif inputs.landmarks.is_file():
+        inputs.landmarks.unlink()
+    planes = settings["images"]["valve_planes"]
+    if planes is not None:
+        _write_if_changed(inputs.planes, _planes(table, planes, inputs))
+    elif inputs.planes.is_file():
+        inputs.planes.unlink()
+    return inputs
