@@ -48,17 +48,19 @@ def _with_rv(labels, affine, surface) -> np.ndarray:
                         lv_label=LABELS["blood_pool"], rv_label=LABELS["right_ventricle"])  # fmt: skip
 
 
-def _iso_grid(ed, es, spacing: float):
+def _grid(ed, es, spacing: float, thickness: float):
+    """A grid over both shapes: ``spacing`` in plane, ``thickness`` along the long axis (z)."""
     both = np.vstack([ed, es])
     low = both.min(axis=0) - _MARGIN
-    shape = tuple(int(n) for n in np.ceil((both.max(axis=0) + _MARGIN - low) / spacing))
-    affine = np.diag([spacing, spacing, spacing, 1.0])
+    step = np.array([spacing, spacing, thickness])
+    shape = tuple(int(n) for n in np.ceil((both.max(axis=0) + _MARGIN - low) / step))
+    affine = np.diag([spacing, spacing, thickness, 1.0])
     affine[:3, 3] = low
     return affine, shape
 
 
-def _pair(folder: Path, name: str, ed, es, faces, spacing: float) -> list[str]:
-    affine, shape = _iso_grid(ed, es, spacing)
+def _pair(folder: Path, name: str, ed, es, faces, spacing: float, thickness: float) -> list[str]:
+    affine, shape = _grid(ed, es, spacing, thickness)
     files = []
     for phase, surface in (("ed", ed), ("es", es)):
         labels = voxelize(surface, faces, affine, shape, label=LABELS["blood_pool"])
@@ -109,8 +111,8 @@ def _settings(truth: bool) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_image_cohort(data, folder, *, spacing: float = 1.5, n_series: int | None = None,
-                       in_plane: float = 1.5, thickness: float = 8.0) -> Path:  # fmt: skip
+def write_image_cohort(data, folder, *, spacing: float = 1.5, thickness: float | None = None,
+                       n_series: int | None = None) -> Path:  # fmt: skip
     """Write a synthetic cohort as label images with its subjects table (see the module).
 
     Parameters
@@ -118,12 +120,13 @@ def write_image_cohort(data, folder, *, spacing: float = 1.5, n_series: int | No
     data : TwoGroupCohort, CovariateCohort or CohortCycles
     folder : path
     spacing : float, default 1.5
-        Isotropic voxel size of a cohort without cycle (mm).
+        The voxel size in the short-axis plane (mm).
+    thickness : float, optional
+        The voxel size along the long axis (mm); default ``spacing`` (isotropic), and 8
+        mm for a whole-cycle cohort (its short-axis stacks).
     n_series : int, optional
         Whole-cycle cohort: the first ``n_series`` subjects get a 4-D series, the others
         their ED and ES frames (default: every subject a series).
-    in_plane, thickness : float
-        Whole-cycle cohort: the voxel size of the short-axis stacks (mm).
 
     Returns
     -------
@@ -137,8 +140,10 @@ def write_image_cohort(data, folder, *, spacing: float = 1.5, n_series: int | No
     cohort_data = cycles.data if cycles is not None else data
     if not hasattr(cohort_data, "cohort") or not hasattr(cohort_data, "groups"):
         raise CohortError(f"data: expected a synthetic cohort, got {type(data).__name__}")
-    if not spacing > 0:
-        raise CohortError(f"spacing: expected a voxel size > 0 mm, got {spacing!r}")
+    thickness = (8.0 if cycles is not None else spacing) if thickness is None else thickness
+    for name, value in (("spacing", spacing), ("thickness", thickness)):
+        if not (np.isfinite(value) and value > 0):
+            raise CohortError(f"{name}: expected a voxel size > 0 mm, got {value!r}")
     truth_folder = folder / "truth"
     write_two_group_cohort(cohort_data, truth_folder)  # meshes and planted_region.json
     (folder / "planted_region.json").write_text(
@@ -156,10 +161,11 @@ def write_image_cohort(data, folder, *, spacing: float = 1.5, n_series: int | No
     for i, subject in enumerate(cohort.subjects):
         if cycles is not None:
             series = i < n_series
-            files = _cycle_images(folder, cycles, i, series, in_plane, thickness)
+            files = _cycle_images(folder, cycles, i, series, spacing, thickness)
         else:
             series = False
-            files = _pair(folder, subject.name, subject.ed, subject.es, cohort.faces, spacing)
+            files = _pair(folder, subject.name, subject.ed, subject.es, cohort.faces, spacing,
+                          thickness)
         image, ed, es = (files[0], "", "") if series else ("", *files)
         j = table["subject"].index(subject.name)
         rows.append([subject.name, image, ed, es, *(table[c][j] for c in covariates)])

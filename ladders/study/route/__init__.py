@@ -11,7 +11,7 @@ from .fingerprint import Fingerprints
 from .route_inputs import RouteInputs, write_route_inputs
 from .route_model import RouteModel, formula_columns, route_model
 from .route_plan import STEP_NAMES, Step, plan_route
-from .route_report import flagged_subjects, subjects_with_results, write_report
+from .route_report import left_out_subjects, subjects_with_results, truth_scores, write_report
 from .route_runner import RECORD_FILE, RouteError, RouteOutcome, StepOutcome, load_route, run_route
 from .route_settings import (
     SETTINGS,
@@ -39,7 +39,8 @@ __all__ = [
     "STEP_NAMES",
     "Step",
     "plan_route",
-    "flagged_subjects",
+    "left_out_subjects",
+    "truth_scores",
     "subjects_with_results",
     "write_report",
     "RECORD_FILE",
