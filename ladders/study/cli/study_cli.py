@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import contextlib
 import sys
 import time
 import warnings
 from pathlib import Path
 
 from .cli_types import DefaultsFormatter, UsageError, check_sigma
+from .common_arguments import parallel_backend
 from .preparation_arguments import units_usage_error
 from .study_arguments import (
     DEFAULT_ALPHA2,
@@ -124,27 +124,6 @@ def _load_cohort(args):
     return cohort, description
 
 
-@contextlib.contextmanager
-def _backend(args):
-    if args.backend != "dask":
-        yield
-        return
-    try:
-        from dask.distributed import Client
-        from joblib import parallel_config
-    except ImportError as exc:
-        raise SystemExit(
-            "symladders study: --backend dask needs the optional extra: "
-            "pip install 'symladders[cluster]'"
-        ) from exc
-    client = Client(args.scheduler) if args.scheduler else Client(processes=True)
-    try:
-        with parallel_config(backend="dask"):
-            yield
-    finally:
-        client.close()
-
-
 def _note_pairs_without_meshes(outcome) -> None:
     """Tell which resumed pairs have no mesh files (they were computed with --no-meshes)."""
     from ..meshes.mesh_outputs import alpha_folder
@@ -194,7 +173,7 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
         f"output {output}"
     )
     print(units)
-    with _backend(args):
+    with parallel_backend(args, "study"):
         done = run(
             config, cohort, output, jobs=args.jobs, progress=not args.no_progress,
             meshes=not args.no_meshes, units=units, data_description=description,

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .cli_types import DefaultsFormatter, nonnegative_int, output_folder
+from .cli_types import DefaultsFormatter
+from .common_arguments import add_output, add_seed
 
 __all__ = ["add_validate_parser", "run_validate_command"]
 
@@ -20,16 +21,8 @@ def add_validate_parser(sub) -> None:
         ),
         formatter_class=DefaultsFormatter,
     )
-    p.add_argument(
-        "--output",
-        "-o",
-        type=output_folder,
-        default="symladders-output/validation",
-        help="output folder",
-    )
-    p.add_argument(
-        "--seed", type=nonnegative_int, default=0, help="seed of the random configurations"
-    )
+    add_output(p, "symladders-output/validation", "output folder")
+    add_seed(p)
     p.add_argument("--quick", action="store_true", help="fewer trials and rungs (seconds)")
     p.set_defaults(run=run_validate_command)
 
