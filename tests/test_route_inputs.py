@@ -80,7 +80,7 @@ def test_a_valid_table_is_read_with_its_kinds_of_images(images):
         (["subject", "image", "es_frame"], ["s1", "b.nii.gz", "5"], 2, "es_frame",
          "outside the series' 5 frames"),
         (["subject", "image", "ed_frame"], ["s1", "b.nii.gz", "first"], 2, "ed_frame",
-         "whole frame number"),
+         "expected a frame index"),
         (["subject", "ed_image", "es_image", "ed_frame"], ["s1", "a_ed.nii.gz", "a_es.nii.gz", "0"],
          2, "ed_frame", "goes with a series"),
         (["subject", "image", "ed_frame", "es_frame"], ["s1", "b.nii.gz", "2", "2"], 2, "es_frame",
@@ -88,8 +88,8 @@ def test_a_valid_table_is_read_with_its_kinds_of_images(images):
         (["subject", "image", "age"], ["s1", "b.nii.gz", ""], 2, "age", "empty covariate"),
         (["subject", "image"], ["s 1", "b.nii.gz"], 2, "subject", "must start with a letter"),
         (["subject", "image", "apex_x"], ["s1", "b.nii.gz", "1"], 1, "apex_y", "all nine"),
-        (["subject", "image", "image"], ["s1", "b.nii.gz", "b.nii.gz"], 1, "image", "second column"),
-        (["name", "image"], ["s1", "b.nii.gz"], 1, "subject", "missing"),
+        (["subject", "image", "image"], ["s1", "b.nii.gz", "b.nii.gz"], 1, None, "named twice"),
+        (["name", "image"], ["s1", "b.nii.gz"], 1, None, "missing column 'subject'"),
     ],
 )  # fmt: skip
 def test_a_table_refuses_what_it_cannot_use(images, header, row, line, column, words):
@@ -98,14 +98,15 @@ def test_a_table_refuses_what_it_cannot_use(images, header, row, line, column, w
         read_subjects_table(path)
     message = str(info.value)
     assert "\n" not in message
-    assert f"{path}, line {line}, column {column!r}" in message, message
+    where = f"{path}, line {line}" + ("" if column is None else f", column {column!r}")
+    assert where in message, message
     assert words in message, message
 
 
 def test_a_duplicate_subject_names_both_lines(images):
     path = _table(images, ["subject", "image"], [["s1", "b.nii.gz"], ["s2", "c.nii.gz"],
                                                  ["s1", "c.nii.gz"]])  # fmt: skip
-    with pytest.raises(SubjectsTableError, match=r"line 4, column 'subject': 's1' again \(first on line 2\)"):
+    with pytest.raises(SubjectsTableError, match=r"line 4, column 'subject': .* \(the first is line 2\)"):
         read_subjects_table(path)
 
 
@@ -119,7 +120,7 @@ def test_incomplete_landmarks_and_a_landmark_that_is_not_a_number(images):
     assert table.entries[1].landmarks is None and table.has_landmarks
     bad = good[:4] + ["x"] + good[5:]
     path = _table(images, ["subject", "image", *columns], [["s1", "b.nii.gz", *bad]])
-    with pytest.raises(SubjectsTableError, match=r"line 2, column 'base_y'"):
+    with pytest.raises(SubjectsTableError, match=r"line 2, column 'base_y': expected a finite number"):
         read_subjects_table(path)
 
 

@@ -92,7 +92,7 @@ def run_run_command(args) -> int:
         return 2
     if args.dry_run:
         return 0
-    partial = [o.name for o in outcome.outcomes if o.status == "partial"]
+    partial = [o.name for o in outcome.outcomes if o.exit_status == 1]
     print(f"symladders run: done; the report: {Path(outcome.settings.output) / 'report.md'}"
           + (f" (subjects failed in: {', '.join(partial)})" if partial else ""))  # fmt: skip
     return 1 if partial else 0

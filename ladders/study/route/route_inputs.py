@@ -29,11 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ladders.tables import Column, TableError, read_table
+
 from ..files import atomic_write_text
 from ..preparation.landmarks import LANDMARK_COLUMNS
 from .subjects_table import SubjectsTable, SubjectsTableError
 
-__all__ = ["RouteInputs", "write_route_inputs", "image_suffix"]
+__all__ = ["RouteInputs", "write_route_inputs", "image_suffix", "series_frames"]
 
 
 def image_suffix(path: Path) -> str:
@@ -112,83 +114,64 @@ def _csv(header, rows) -> str:
     return out.getvalue()
 
 
-def _planes(table: SubjectsTable, path: Path, inputs: RouteInputs) -> str:
-    """The settings' valve-plane table (subject, frame, x..nz) per image and frame."""
-    from .route_settings import RouteSettingsError
+_PLANE_COLUMNS = (
+    Column("subject"),
+    Column("frame", required=False, empty=""),
+    *(Column(c, "number") for c in ("x", "y", "z", "nx", "ny", "nz")),
+)
 
+
+def _planes(table: SubjectsTable, path: Path) -> str:
+    """The settings' valve-plane table (subject, frame, x..nz) per image and frame, in the
+    columns ``symladders mesh --cut-planes`` reads (image, x..nz, frame)."""
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except OSError as exc:
-        raise RouteSettingsError(f"valve planes {path}: cannot be read ({exc.strerror})") from None
-    reader = csv.DictReader(io.StringIO(text))
-    needed = ("subject", "x", "y", "z", "nx", "ny", "nz")
-    columns = [c.strip() for c in reader.fieldnames or []]
-    for column in needed:
-        if column not in columns:
-            raise SubjectsTableError(f"valve planes {path}, line 1, column {column!r}: missing")
-    extra = [c for c in columns if c not in (*needed, "frame")]
-    if extra:
-        raise SubjectsTableError(f"valve planes {path}, line 1, column {extra[0]!r}: unknown "
-                                 "column (expected subject, frame, x, y, z, nx, ny, nz)")  # fmt: skip
-    rows, seen = [], {}
-    known = {e.subject: e for e in table.entries}
-    for line, row in enumerate(reader, start=2):
-        row = {k.strip(): (v or "").strip() for k, v in row.items() if k}
-        subject = row["subject"]
-        where = f"valve planes {path}, line {line}"
-        if subject not in known:
-            raise SubjectsTableError(f"{where}, column 'subject': {subject!r} is not in the "
-                                     "subjects table")  # fmt: skip
-        entry = known[subject]
-        frame = row.get("frame", "").lower()
-        try:
-            plane = [float(row[c]) for c in needed[1:]]
-        except ValueError:
-            bad = next(c for c in needed[1:] if not _number(row[c]))
-            raise SubjectsTableError(f"{where}, column {bad!r}: expected a number, got "
-                                     f"{row[bad]!r}") from None  # fmt: skip
+        planes = read_table(path, _PLANE_COLUMNS, what="valve planes", key=("subject", "frame"))
+        planes.refuse_unknown("subject", set(table.subjects))
+    except TableError as exc:
+        raise SubjectsTableError(str(exc)) from None
+    rows = []
+    for i, row in enumerate(planes.rows):
+        entry = table.entry(row["subject"])
+        frame = row["frame"].lower()
+        plane = [f"{row[c]:.6g}" for c in ("x", "y", "z", "nx", "ny", "nz")]
         if entry.series is None:
             if frame not in ("ed", "es", ""):
-                raise SubjectsTableError(f"{where}, column 'frame': {subject!r} has two 3-D "
-                                         f"images: expected 'ed', 'es' or empty, got {frame!r}")  # fmt: skip
-            images = [f"{subject}_{p}{image_suffix(entry.ed_image)}"
-                      for p in (("ed", "es") if not frame else (frame,))]  # fmt: skip
-            targets = [(name, "") for name in images]
-        else:
-            name = f"{subject}{image_suffix(entry.series)}"
-            if frame in ("ed", "es"):
-                given = entry.ed_frame if frame == "ed" else entry.es_frame
-                if given is None and frame == "es":
-                    raise SubjectsTableError(f"{where}, column 'frame': 'es' needs the subject's "
-                                             "es_frame in the subjects table (or the frame's "
-                                             "number)")  # fmt: skip
-                frame = str(given or 0)
-            elif frame:
-                try:
-                    number = int(frame)
-                except ValueError:
-                    raise SubjectsTableError(f"{where}, column 'frame': expected a frame number, "
-                                             f"'ed', 'es' or empty, got {frame!r}") from None  # fmt: skip
-                if not 0 <= number < entry.n_frames:
-                    raise SubjectsTableError(f"{where}, column 'frame': frame {number} outside "
-                                             f"the series' {entry.n_frames} frames")  # fmt: skip
-            targets = [(name, frame)]
-        for name, f in targets:
-            key = (name, f)
-            if key in seen:
-                raise SubjectsTableError(f"{where}: a second plane for {subject!r} frame "
-                                         f"{f or 'all'} (first on line {seen[key]})")  # fmt: skip
-            seen[key] = line
-            rows.append([name, *(f"{x:.6g}" for x in plane), f])
+                raise SubjectsTableError(str(planes.error(
+                    i, "frame", f"{entry.subject!r} has two 3-D images: expected 'ed', 'es' or "
+                                f"empty, got {frame!r}")))  # fmt: skip
+            for phase in ("ed", "es") if not frame else (frame,):
+                rows.append([f"{entry.subject}_{phase}{image_suffix(entry.ed_image)}", *plane, ""])
+            continue
+        if frame in ("ed", "es"):
+            frame = str(series_frames(entry, None)[0 if frame == "ed" else 1])
+        elif frame:
+            try:
+                number = int(frame)
+            except ValueError:
+                raise SubjectsTableError(str(planes.error(
+                    i, "frame", f"expected a frame number, 'ed', 'es' or empty, got {frame!r}"
+                ))) from None  # fmt: skip
+            if not 0 <= number < entry.n_frames:
+                raise SubjectsTableError(str(planes.error(
+                    i, "frame", f"frame {number} outside the series' {entry.n_frames} frames"
+                )))  # fmt: skip
+        rows.append([f"{entry.subject}{image_suffix(entry.series)}", *plane, frame])
     return _csv(["image", "x", "y", "z", "nx", "ny", "nz", "frame"], rows)
 
 
-def _number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+def series_frames(entry, label: int | None) -> tuple[int, int]:
+    """The ED and ES frames of a subject's series: the table's, else frame 0 and the frame of
+    least cavity volume (:func:`~ladders.study.imaging.series_frames.least_volume_frame`, the
+    rule ``symladders mesh`` applies; it needs ``label``)."""
+    ed, es = entry.ed_frame, entry.es_frame
+    if es is None:
+        from ..imaging.series_frames import least_volume_frame
+
+        if label is None:
+            raise SubjectsTableError(f"subject {entry.subject!r}: its ES frame is found when the "
+                                     "series is meshed; name it (es_frame) to use 'es' here")  # fmt: skip
+        es = least_volume_frame(entry.series, label)[0]
+    return (0 if ed is None else ed), es
 
 
 def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool) -> RouteInputs:
@@ -220,11 +203,11 @@ def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool
         for path in sorted(inputs.series.iterdir()):
             if path.name not in tracked and not path.name.endswith(".source"):
                 path.unlink()
-    frames = [(e.subject, e.ed_frame, e.es_frame) for e in table.entries
+    label = settings["images"]["label"]
+    frames = [(e.subject, *series_frames(e, label)) for e in table.entries
               if e.series is not None and (e.ed_frame is not None or e.es_frame is not None)]  # fmt: skip
     if frames:
-        rows = [(s, "" if ed is None else ed, "" if es is None else es) for s, ed, es in frames]
-        _write_if_changed(inputs.frames, _csv(["subject", "ed", "es"], rows))
+        _write_if_changed(inputs.frames, _csv(["subject", "ed", "es"], frames))
     elif inputs.frames.is_file():
         inputs.frames.unlink()
     if table.has_landmarks:
@@ -235,7 +218,7 @@ def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool
         inputs.landmarks.unlink()
     planes = settings["images"]["valve_planes"]
     if planes is not None:
-        _write_if_changed(inputs.planes, _planes(table, planes, inputs))
+        _write_if_changed(inputs.planes, _planes(table, planes))
     elif inputs.planes.is_file():
         inputs.planes.unlink()
     return inputs

@@ -132,7 +132,7 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
                       [meshes], display, "the surface of every image, ED and ES (world mm)"))  # fmt: skip
     landmarks = ["--landmarks", inputs.landmarks] if table.has_landmarks else []
     argv = ["--meshes", meshes, "-o", atlas, *landmarks, "--max-iter",
-            str(settings["atlas"]["max_iter"]), *batch[2:]]  # fmt: skip
+            str(settings["atlas"]["max_iter"]), *batch]  # fmt: skip
     steps.append(Step("atlas", "atlas", argv, [meshes, *landmarks[1:]], [atlas_dir], [],
                       "the mean ED shape of the subjects"))  # fmt: skip
     argv = ["--atlas", atlas, "--meshes", meshes, "-o", corresponded, *landmarks, *batch]
@@ -169,11 +169,10 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
                 *batch]  # fmt: skip
         steps.append(Step("cycle-study", "cycle-study", argv, [tracked, corresponded], [cycle], [],
                           "every tracked frame transported to the atlas"))  # fmt: skip
-        if model.groups:
+        if _comparable(table, model):
             cycle_analysis = out / "cycle_analysis"
             groups = cycle_analysis / "groups.csv"
-            argv = [cycle, "--groups", groups, "--compare", ",".join(model.groups[1::-1][:2]),
-                    "--tfce", "--permutations", str(model_settings["permutations"]),
+            argv = [cycle, "--groups", groups, "--tfce", "--permutations", str(model_settings["permutations"]),
                     "--seed", str(model_settings["seed"])]  # fmt: skip
             if has_landmarks:
                 argv += ["--aha", aha]
@@ -199,3 +198,16 @@ def _model_argv(model: RouteModel, s: dict, design: Path) -> list:
     if s["outcome"] is not None:
         argv += ["--outcome", ",".join(s["outcome"])]
     return argv
+
+
+#: The fewest tracked subjects per group for the cycle's analysis.
+MIN_PER_GROUP = 3
+
+
+def _comparable(table: SubjectsTable, model: RouteModel) -> bool:
+    """Whether the tracked subjects make groups the cycle's analysis can compare (at least
+    :data:`MIN_PER_GROUP` in each of two groups or more)."""
+    if len(model.groups) < 2:
+        return False
+    counts = [sum(e.covariates["group"] == g for e in table.tracked) for g in model.groups]
+    return sum(c >= MIN_PER_GROUP for c in counts) >= 2

@@ -48,7 +48,8 @@ class RouteError(RuntimeError):
 
 @dataclass
 class StepOutcome:
-    """What a step did: ``ran``, ``partial`` (some subjects failed), ``reused``, ``failed``."""
+    """What a step did: ``ran``, ``partial`` (some subjects failed) or ``reused``; its
+    ``exit_status`` is the command's (1: some subjects failed, also when reused)."""
 
     name: str
     status: str
@@ -211,7 +212,8 @@ def _run_step(step, i, n, root, record, prints, redo, execute, echo, outcome, ta
     if (step.name not in redo and stored.get("key") == key and writes is not None
             and stored.get("writes") == writes and stored.get("status") in ("ran", "partial")):  # fmt: skip
         echo(f"[{i}/{n}] {step.name}: reused ({step.command(root)})")
-        return StepOutcome(step.name, "reused", 0.0, stored.get("summary", []))
+        exit_status = 1 if stored["status"] == "partial" else 0
+        return StepOutcome(step.name, "reused", 0.0, stored.get("summary", []), None, exit_status)
     echo(f"[{i}/{n}] {step.name}: {step.command(root)}")
     start = time.perf_counter()
     logs = root / "logs"

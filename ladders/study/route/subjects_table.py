@@ -26,13 +26,13 @@ series, an incomplete landmark, an empty covariate.
 
 from __future__ import annotations
 
-import csv
-import io
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from ladders.tables import Column, Table, TableError, read_table
 
 from ..errors import CohortError
 from ..preparation.landmarks import LANDMARK_COLUMNS
@@ -51,7 +51,6 @@ IMAGE_COLUMNS = ("image", "ed_image", "es_image")
 #: The columns naming a series' end-diastolic and end-systolic frames.
 FRAME_COLUMNS = ("ed_frame", "es_frame")
 _LANDMARK_COLUMNS = LANDMARK_COLUMNS[1:]
-_RESERVED = ("subject", *IMAGE_COLUMNS, *FRAME_COLUMNS, *_LANDMARK_COLUMNS)
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
@@ -146,10 +145,12 @@ class SubjectsTable:
         raise KeyError(subject)
 
 
-def _fail(path: Path, line: int | None, column: str | None, message: str):
-    where = f"{path}" + ("" if line is None else f", line {line}")
-    where += "" if column is None else f", column {column!r}"
-    raise SubjectsTableError(f"subjects table {where}: {message}")
+_COLUMNS = (
+    Column("subject"),
+    *(Column(c, required=False) for c in IMAGE_COLUMNS),
+    *(Column(c, "frame", required=False) for c in FRAME_COLUMNS),
+    *(Column(c, "number", required=False) for c in _LANDMARK_COLUMNS),
+)
 
 
 def _frames_of(path: Path) -> int:
@@ -164,100 +165,88 @@ def _frames_of(path: Path) -> int:
     raise ValueError(f"expected a 3-D image or a 4-D series, got {len(shape)} dimensions")
 
 
-def _image(table: Path, line: int, column: str, cell: str) -> tuple[Path, int]:
-    path = Path(cell).expanduser()
-    path = path if path.is_absolute() else table.parent / path
-    if not path.is_file():
-        what = "a folder" if path.is_dir() else "no such file"
-        _fail(table, line, column, f"{cell!r}: {what}")
-    if not path.name.lower().endswith((".nii", ".nii.gz")):
-        _fail(table, line, column, f"{cell!r}: expected a NIfTI file (.nii or .nii.gz)")
-    try:
-        return path.resolve(), _frames_of(path)
-    except Exception as exc:  # noqa: BLE001 - nibabel raises many kinds for a bad file
-        _fail(table, line, column, f"{cell!r}: cannot be read as NIfTI ({exc})")
+class _Row:
+    """One row being checked: its cells and a way to refuse it naming its line."""
 
+    def __init__(self, table: Table, index: int):
+        self.table, self.index, self.cells = table, index, table.rows[index]
 
-def _frame(table: Path, line: int, column: str, cell: str, n_frames: int) -> int | None:
-    if not cell:
-        return None
-    try:
-        value = int(cell)
-    except ValueError:
-        _fail(table, line, column, f"expected a whole frame number (0-based), got {cell!r}")
-    if not 0 <= value < n_frames:
-        _fail(table, line, column, f"frame {value} outside the series' {n_frames} frames "
-                                   f"(0 to {n_frames - 1})")  # fmt: skip
-    return value
+    def fail(self, column: str | None, problem: str):
+        raise SubjectsTableError(str(self.table.error(self.index, column, problem)))
 
-
-def _landmarks(table: Path, line: int, row: dict, present: list[str]) -> np.ndarray | None:
-    if not present:
-        return None
-    cells = [row.get(c, "").strip() for c in _LANDMARK_COLUMNS]
-    if not any(cells):
-        return None
-    values = []
-    for column, cell in zip(_LANDMARK_COLUMNS, cells):
+    def image(self, column: str) -> tuple[Path, int]:
+        cell = self.cells[column]
+        path = Path(cell).expanduser()
+        path = path if path.is_absolute() else self.table.path.parent / path
+        if not path.is_file():
+            self.fail(column, f"{cell!r}: {'a folder' if path.is_dir() else 'no such file'}")
+        if not path.name.lower().endswith((".nii", ".nii.gz")):
+            self.fail(column, f"{cell!r}: expected a NIfTI file (.nii or .nii.gz)")
         try:
-            value = float(cell)
-        except ValueError:
-            _fail(table, line, column, f"expected a coordinate in mm, got {cell!r} (a landmark "
-                                       "needs all nine cells, or none)")  # fmt: skip
-        if not np.isfinite(value):
-            _fail(table, line, column, f"expected a finite coordinate, got {cell!r}")
-        values.append(value)
-    return np.array(values, float).reshape(3, 3)
+            return path.resolve(), _frames_of(path)
+        except Exception as exc:  # noqa: BLE001 - nibabel raises many kinds for a bad file
+            self.fail(column, f"{cell!r}: cannot be read as NIfTI ({exc})")
 
 
-def _entry(table: Path, line: int, row: dict, covariates: list[str], landmarks: list[str]):
-    subject = row["subject"].strip()
-    if not subject:
-        _fail(table, line, "subject", "empty subject name")
-    if not _NAME.match(subject):
-        _fail(table, line, "subject", f"{subject!r}: a subject's name must start with a letter or "
-                                      "digit and hold only letters, digits, '-', '_' and '.'")  # fmt: skip
-    cells = {c: row.get(c, "").strip() for c in (*IMAGE_COLUMNS, *FRAME_COLUMNS)}
-    series = ed = es = None
+def _images(row: _Row):
+    """``(series, ed_image, es_image, n_frames)`` of a row."""
+    cells = row.cells
     if cells["image"]:
         if cells["ed_image"] or cells["es_image"]:
-            column = "ed_image" if cells["ed_image"] else "es_image"
-            _fail(table, line, column, "give either 'image' (a 4-D series) or 'ed_image' and "
-                                       "'es_image' (two 3-D images), not both")  # fmt: skip
-        series, n_frames = _image(table, line, "image", cells["image"])
+            row.fail("ed_image" if cells["ed_image"] else "es_image",
+                     "give either 'image' (a 4-D series) or 'ed_image' and 'es_image' (two 3-D "
+                     "images), not both")  # fmt: skip
+        series, n_frames = row.image("image")
         if n_frames < 2:
-            _fail(table, line, "image", f"{cells['image']!r} is a 3-D image: a series needs the "
-                                        "frames on a fourth axis; two 3-D images go in 'ed_image' "
-                                        "and 'es_image'")  # fmt: skip
-    elif cells["ed_image"] or cells["es_image"]:
-        for column in ("ed_image", "es_image"):
-            if not cells[column]:
-                _fail(table, line, column, "empty: 'ed_image' and 'es_image' go together")
-        ed, n_ed = _image(table, line, "ed_image", cells["ed_image"])
-        es, n_es = _image(table, line, "es_image", cells["es_image"])
-        for column, n in (("ed_image", n_ed), ("es_image", n_es)):
-            if n != 1:
-                _fail(table, line, column, f"a 4-D series of {n} frames: give it in 'image'")
-        n_frames = 2
-    else:
-        _fail(table, line, "image", "no image: give 'image' (a 4-D series) or 'ed_image' and "
-                                    "'es_image'")  # fmt: skip
-    frames = {}
+            row.fail("image", f"{cells['image']!r} is a 3-D image: a series has its frames on "
+                              "a fourth axis; two 3-D images go in 'ed_image' and 'es_image'")  # fmt: skip
+        return series, None, None, n_frames
+    if not (cells["ed_image"] or cells["es_image"]):
+        row.fail("image", "no image: give 'image' (a 4-D series) or 'ed_image' and 'es_image'")
+    for column in ("ed_image", "es_image"):
+        if not cells[column]:
+            row.fail(column, "empty: 'ed_image' and 'es_image' go together")
+    images = []
+    for column in ("ed_image", "es_image"):
+        path, n = row.image(column)
+        if n != 1:
+            row.fail(column, f"a 4-D series of {n} frames: give it in 'image'")
+        images.append(path)
+    return None, *images, 2
+
+
+def _entry(row: _Row, covariates: list[str]) -> SubjectEntry:
+    cells = row.cells
+    subject = cells["subject"]
+    if not _NAME.match(subject):
+        row.fail("subject", f"{subject!r}: a subject's name must start with a letter or digit "
+                            "and hold only letters, digits, '-', '_' and '.'")  # fmt: skip
+    series, ed, es, n_frames = _images(row)
     for column in FRAME_COLUMNS:
-        if cells[column] and series is None:
-            _fail(table, line, column, "a frame goes with a series in 'image'")
-        frames[column] = _frame(table, line, column, cells[column], n_frames)
-    if None not in frames.values() and frames["ed_frame"] == frames["es_frame"]:
-        _fail(table, line, "es_frame", f"the same frame as ed_frame ({frames['ed_frame']})")
+        frame = cells[column]
+        if frame is None:
+            continue
+        if series is None:
+            row.fail(column, "a frame goes with a series in 'image'")
+        if frame >= n_frames:
+            row.fail(column, f"frame {frame} outside the series' {n_frames} frames (0 to "
+                             f"{n_frames - 1})")  # fmt: skip
+    if cells["ed_frame"] is not None and cells["ed_frame"] == cells["es_frame"]:
+        row.fail("es_frame", f"the same frame as ed_frame ({cells['ed_frame']})")
+    points = [cells[c] for c in _LANDMARK_COLUMNS]
+    landmarks = None
+    if any(p is not None for p in points):
+        missing = next((c for c, p in zip(_LANDMARK_COLUMNS, points) if p is None), None)
+        if missing is not None:
+            row.fail(missing, "empty: a landmark needs all nine cells, or none")
+        landmarks = np.array(points, float).reshape(3, 3)
     values = {}
     for column in covariates:
-        cell = row.get(column, "").strip()
-        if not cell:
-            _fail(table, line, column, "empty covariate: fill it, or leave the subject out of "
-                                       "the table")  # fmt: skip
-        values[column] = cell
-    return SubjectEntry(subject, line, series, ed, es, n_frames, frames["ed_frame"],
-                        frames["es_frame"], _landmarks(table, line, row, landmarks), values)  # fmt: skip
+        if not cells[column]:
+            row.fail(column, "empty covariate: fill it, or leave the subject out of the table")
+        values[column] = cells[column]
+    return SubjectEntry(subject, row.table.lines[row.index], series, ed, es, n_frames,
+                        cells["ed_frame"], cells["es_frame"], landmarks, values)  # fmt: skip
 
 
 def read_subjects_table(path, ignore=()) -> SubjectsTable:
@@ -277,45 +266,20 @@ def read_subjects_table(path, ignore=()) -> SubjectsTable:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        _fail(path, None, None, f"cannot be read ({getattr(exc, 'strerror', None) or exc})")
-    reader = csv.reader(io.StringIO(text))
-    header = [h.strip() for h in next(reader, [])]
-    if not any(header):
-        _fail(path, None, None, "the file is empty: expected a header line such as "
-                                "'subject,image,group'")  # fmt: skip
-    seen = {}
-    for i, name in enumerate(header):
-        if not name:
-            _fail(path, 1, f"#{i + 1}", "a column without a name")
-        if name in seen:
-            _fail(path, 1, name, "a second column of this name")
-        seen[name] = i
-    if "subject" not in seen:
-        _fail(path, 1, "subject", f"missing (columns: {', '.join(header)})")
-    unknown_ignored = [c for c in ignore if c not in seen]
-    if unknown_ignored:
-        _fail(path, 1, unknown_ignored[0], "listed under 'ignore' but not in the table")
-    landmarks = [c for c in _LANDMARK_COLUMNS if c in seen]
-    if landmarks and len(landmarks) != len(_LANDMARK_COLUMNS):
-        missing = [c for c in _LANDMARK_COLUMNS if c not in seen]
-        _fail(path, 1, missing[0], "missing: the landmarks need all nine columns "
-                                   f"{', '.join(_LANDMARK_COLUMNS)}")  # fmt: skip
-    covariates = [c for c in header if c not in _RESERVED and c not in ignore]
-    entries, lines = [], {}
-    for line, cells in enumerate(reader, start=2):
-        if not any(c.strip() for c in cells):
-            continue
-        if len(cells) > len(header):
-            _fail(path, line, None, f"{len(cells)} cells for {len(header)} columns")
-        row = dict(zip(header, cells))
-        entry = _entry(path, line, row, covariates, landmarks)
-        if entry.subject in lines:
-            _fail(path, line, "subject", f"{entry.subject!r} again (first on line "
-                                         f"{lines[entry.subject]})")  # fmt: skip
-        lines[entry.subject] = line
-        entries.append(entry)
-    if not entries:
-        _fail(path, None, None, "no subject: the table has a header and no row")
+        table = read_table(path, _COLUMNS, what="subjects table", key=("subject",), extra=True)
+    except TableError as exc:
+        raise SubjectsTableError(str(exc)) from None
+    present = [c for c in _LANDMARK_COLUMNS if c in table.columns]
+    if present and len(present) != len(_LANDMARK_COLUMNS):
+        missing = next(c for c in _LANDMARK_COLUMNS if c not in table.columns)
+        raise SubjectsTableError(f"subjects table {path}, line 1, column {missing!r}: missing: "
+                                 f"the landmarks need all nine columns "
+                                 f"{', '.join(_LANDMARK_COLUMNS)}")  # fmt: skip
+    for column in ignore:
+        if column not in table.columns:
+            raise SubjectsTableError(f"subjects table {path}, line 1, column {column!r}: listed "
+                                     "under 'ignore' but not in the table")  # fmt: skip
+    declared = {c.name for c in _COLUMNS}
+    covariates = [c for c in table.columns if c not in declared and c not in ignore]
+    entries = [_entry(_Row(table, i), covariates) for i in range(len(table))]
     return SubjectsTable(path.resolve(), entries, covariates, list(ignore))
