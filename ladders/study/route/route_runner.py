@@ -214,11 +214,13 @@ def _run_step(step, i, n, root, record, prints, redo, execute, echo, outcome, ta
         echo(f"[{i}/{n}] {step.name}: reused ({step.command(root)})")
         exit_status = 1 if stored["status"] == "partial" else 0
         return StepOutcome(step.name, "reused", 0.0, stored.get("summary", []), None, exit_status)
-    echo(f"[{i}/{n}] {step.name}: {step.command(root)}")
-    start = time.perf_counter()
     logs = root / "logs"
     logs.mkdir(exist_ok=True)
     log = logs / f"{step.name}.log"
+    echo(f"[{i}/{n}] {step.name}: {step.command(root)}")
+    if step.argv is not None:
+        echo(f"    (its output, as it runs: {log})")
+    start = time.perf_counter()
     if step.argv is None:
         from .route_report import write_report
 
@@ -226,12 +228,12 @@ def _run_step(step, i, n, root, record, prints, redo, execute, echo, outcome, ta
         status, summary = 0, [f"report: {root / 'report.md'}"]
         log.write_text("\n".join(summary) + "\n", encoding="utf-8")
     else:
-        buffer = io.StringIO()
         argv = [step.program, *map(str, step.argv)]
-        with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(buffer):
-            status = execute(argv)
-        text = buffer.getvalue()
-        log.write_text(f"$ symladders {' '.join(argv)}\n{text}", encoding="utf-8")
+        with open(log, "w", encoding="utf-8", buffering=1) as fh:  # followed live: tail -f
+            fh.write(f"$ symladders {' '.join(argv)}\n")
+            with contextlib.redirect_stdout(fh), contextlib.redirect_stderr(fh):
+                status = execute(argv)
+        text = log.read_text(encoding="utf-8")
         summary = _summary(text, argv[0])
     seconds = time.perf_counter() - start
     for line in summary:
