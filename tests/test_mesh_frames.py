@@ -127,3 +127,39 @@ def test_a_plane_for_one_frame_cuts_that_frame_only(images, tmp_path):
     records = [json.loads((tmp_path / "o" / f"p1_{p}.json").read_text()) for p in ("ed", "es")]
     assert records[0]["settings"]["cut_plane"] == [0, 0, 10, 0, 0, 1]
     assert records[1]["settings"]["cut_plane"] is None
+
+
+def _worker_address(_):
+    from distributed import get_worker
+
+    return get_worker().address
+
+
+def test_the_backend_flags_send_a_batch_to_the_dask_scheduler(images, tmp_path, capsys):
+    """``--backend dask --scheduler ADDRESS``: every run_batch of the block runs on the
+    cluster's workers, and the command's results are those of the local processes."""
+    distributed = pytest.importorskip("distributed")
+    from argparse import Namespace
+
+    from ladders.study.batch import run_batch
+    from ladders.study.cli.common_arguments import parallel_backend
+
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=2,
+                                  protocol="tcp://", dashboard_address=None) as cluster:  # fmt: skip
+        args = Namespace(backend="dask", scheduler=cluster.scheduler_address)
+        worker = next(iter(cluster.workers.values())).address
+        with parallel_backend(args, "mesh"):
+            assert (
+                list(run_batch(_worker_address, [(i,) for i in range(3)], jobs=2)) == [worker] * 3
+            )
+        common = ["--label", "1", "--vertices", "0", "--no-progress", "--jobs", "2"]
+        assert main(["mesh", str(images[1]), *common, "-o", str(tmp_path / "dask"),
+                     "--backend", "dask", "--scheduler", cluster.scheduler_address]) == 0  # fmt: skip
+        capsys.readouterr()
+        assert main(["mesh", str(images[0]), "--label", "1", "--scheduler",
+                     cluster.scheduler_address, "-o", str(tmp_path / "x")]) == 2  # fmt: skip
+        assert "--scheduler: needs --backend dask" in capsys.readouterr().err
+    assert main(["mesh", str(images[1]), *common, "-o", str(tmp_path / "loky")]) == 0
+    for name in ("p2_ed", "p2_es"):
+        np.testing.assert_array_equal(read_mesh(tmp_path / "dask" / f"{name}.vtk")[0],
+                                      read_mesh(tmp_path / "loky" / f"{name}.vtk")[0])  # fmt: skip

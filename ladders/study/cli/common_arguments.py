@@ -75,8 +75,8 @@ def add_output(p, default: str | None, what: str, *, file_type=None) -> None:
 def add_jobs(p) -> None:
     """``--jobs/-j N``: workers of the batch (-1: one per core)."""
     p.add_argument("--jobs", "-j", type=jobs_count, default=JOBS_DEFAULT, metavar="N",
-                   help="workers of the batch (subjects or images at a time; -1: one per core); "
-                        "with --backend dask, the tasks the cluster runs at a time")  # fmt: skip
+                   help="workers of the batch: subjects or images at a time (-1: one per "
+                        "core)")  # fmt: skip
 
 
 def add_no_progress(p) -> None:

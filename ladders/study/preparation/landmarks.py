@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ladders.tables import Column, read_table
+from ladders.tables import Column, TableDict, locate, read_table
 
 from ..errors import CohortError
 from ..files import atomic_write_text
@@ -48,6 +48,7 @@ __all__ = [
     "check_landmarks",
     "axial_angle",
     "atlas_landmarks_path",
+    "refuse_unknown_subjects",
 ]
 
 #: The table's default file name in a folder of meshes.
@@ -191,7 +192,7 @@ def read_landmarks(path) -> dict:
     """
     table = read_table(path, _TABLE_COLUMNS, what="landmark table", key=("subject",),
                        error=LandmarkError)  # fmt: skip
-    out = {}
+    out = TableDict({}, table)
     for i, row in enumerate(table.rows):
         values = [row[column] for column in LANDMARK_COLUMNS[1:]]
         try:
@@ -199,6 +200,25 @@ def read_landmarks(path) -> dict:
         except LandmarkError as exc:
             raise table.error(i, None, f"subject {row['subject']!r}: {exc}") from None
     return out
+
+
+def refuse_unknown_subjects(table: dict, subjects, source) -> None:
+    """Refuse a row of a landmark table that names none of ``subjects`` nor the atlas (a
+    row that would be ignored: a typo, or another cohort's table), naming its line.
+
+    Raises
+    ------
+    LandmarkError
+    """
+    known = set(subjects) | {"atlas"}
+    unknown = [name for name in table if name not in known]
+    if unknown:
+        where = locate(table, "subject", unknown[0], f"landmarks {source}")
+        shown = ", ".join(sorted(known - {"atlas"})[:6])
+        raise LandmarkError(
+            f"{where}: unknown subject {unknown[0]!r}: no such subject among the meshes "
+            f"({shown}{' ...' if len(known) > 7 else ''})"
+        )
 
 
 def check_landmarks(landmarks: Landmarks, vertices, faces, tolerance: float, name: str) -> None:
