@@ -79,15 +79,17 @@ def _shell_commands(line: str) -> list[str]:
         tokens = shlex.split(text, comments=True)
     except ValueError:
         return []
-    out, segment = [], []
+    out, segment, depth = [], [], 0
     for token in [*tokens, ";"]:
-        if token in _SHELL:
+        if token in _SHELL and not (token == "|" and depth > 0):  # '[A | B]': alternatives
+            depth = 0
             words = [w for w in segment if not re.match(r"^[A-Z_]+=", w)]
             if words[:1] == ["symladders"] and len(words) > 1:
                 out.append(shlex.join(words))
             segment = []
         else:
             segment.append(token)
+            depth += token.count("[") - token.count("]")
     return out
 
 
@@ -99,8 +101,8 @@ def _command_parsers():
 
 def _lenient(value_of_choices, syntax):
     def check(text):
-        if _PLACEHOLDER.match(text):
-            return value_of_choices
+        if _PLACEHOLDER.match(text):  # any value: a choice's, or the text itself
+            return text if value_of_choices is None else value_of_choices
         return syntax(text)
 
     return check
@@ -126,8 +128,25 @@ def _prepare(parser, subparsers, inline: bool):
 PARSERS = {inline: _prepare(*_command_parsers(), inline) for inline in (False, True)}
 
 
+def _alternatives(tokens: list[str]) -> list[list[str]]:
+    """A synopsis's ``[A ... | B ...]`` as one command with ``A ...`` and one with ``B ...``."""
+    if "|" not in tokens:
+        return [tokens]
+    k = tokens.index("|")
+    start = max(i for i in range(k) if "[" in tokens[i])
+    end = min(i for i in range(k, len(tokens)) if "]" in tokens[i])
+    left = [*tokens[:k], *tokens[end + 1 :]]
+    right = [*tokens[:start], *tokens[k + 1 :]]
+    return [*_alternatives(left), *_alternatives(right)]
+
+
 def _variants(tokens: list[str]) -> list[list[str]]:
-    """The command without a synopsis's brackets, once per alternative ``a|b`` of a token."""
+    """The command without a synopsis's brackets, once per alternative (``[A | B]``, and
+    ``a|b`` within a token)."""
+    return [v for alternative in _alternatives(tokens) for v in _value_variants(alternative)]
+
+
+def _value_variants(tokens: list[str]) -> list[list[str]]:
     tokens = [t.replace("[", "").replace("]", "") for t in tokens]
     tokens = [t for t in tokens if t]
     variants = [[t.split("|")[0] if "|" in t else t for t in tokens]]
@@ -222,6 +241,11 @@ def test_the_rules_accept_placeholders_synopses_and_shell_lines():
     )
     with pytest.raises(UsageError):  # every alternative is parsed
         parse("symladders correspond --atlas a.vtk --meshes M [--units auto|inch]", False)
+    parse("symladders study [--meshes DIR | --cohort TABLE] [--seed 1]", False)
+    with pytest.raises(UsageError):  # exclusive: each alternative alone
+        parse("symladders study --meshes DIR --cohort TABLE", False)
+    with pytest.raises(UsageError):
+        parse("symladders study [--meshes DIR | --cohort TABLE --bad 1]", False)
     found = commands_of("```sh\nPYTHONPATH=. symladders study \\\n  --full  # all\n"
                         "pip install . && symladders validate | head\n```\n"
                         "Run `symladders track --cut-planes` or `symladders atlas: done`.\n")  # fmt: skip
