@@ -26,7 +26,7 @@ from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Column", "Table", "TableError", "read_table"]
+__all__ = ["Column", "Table", "TableError", "TableDict", "read_table", "locate"]
 
 
 class TableError(ValueError):
@@ -98,6 +98,9 @@ class Table:
         One per data row: ``{column: value}`` (values parsed by their column's kind).
     lines : list of int
         The file line of every row (the header is line 1).
+    error_type : type
+        The exception its refusals raise (:class:`TableError` or the caller's, a
+        ``ValueError``).
     """
 
     path: Path
@@ -105,6 +108,7 @@ class Table:
     columns: tuple
     rows: list = field(default_factory=list)
     lines: list = field(default_factory=list)
+    error_type: type = TableError
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -114,9 +118,9 @@ class Table:
         place = f"{self.what} {self.path}, line {self.lines[index]}"
         return place if column is None else f"{place}, column {column!r}"
 
-    def error(self, index: int, column: str | None, problem: str) -> TableError:
-        """A :class:`TableError` naming row ``index`` (0-based) and ``column``."""
-        return TableError(f"{self.where(index, column)}: {problem}")
+    def error(self, index: int, column: str | None, problem: str) -> ValueError:
+        """The table's error (:attr:`error_type`) naming row ``index`` (0-based) and ``column``."""
+        return self.error_type(f"{self.where(index, column)}: {problem}")
 
     def column(self, name: str) -> list:
         """The values of one column, in the rows' order."""
@@ -132,7 +136,7 @@ class Table:
                     f" and {len(names) - 6} more" if len(names) > 6 else ""
                 )
                 raise self.error(
-                    i, column, f"unknown {what} {row[column]!r} ({what}s: {shown or 'none'})"
+                    i, column, f"unknown {what} {row[column]!r} (known: {shown or 'none'})"
                 )
 
     def refuse_beyond(self, column: str, limits: Mapping, key: str, what: str = "series") -> None:
@@ -145,6 +149,27 @@ class Table:
                     i, column, f"{column} {value} is outside the {what} {row[key]!r} "
                     f"({limit} frames: 0 to {limit - 1})",
                 )  # fmt: skip
+
+
+class TableDict(dict):
+    """A dict made from a table (e.g. ``{subject: group}``, or ``{column: values}``) that
+    keeps the :class:`Table` it was read from (``table``), so that a check made later on the
+    dict can name the line of the value it refuses (:func:`locate`)."""
+
+    def __init__(self, items, table: Table | None = None):
+        super().__init__(items)
+        self.table = table
+
+
+def locate(data, column: str, value, fallback: str) -> str:
+    """``"<what> <path>, line <n>, column '<column>'"`` of the first row of ``data``'s table
+    whose ``column`` is ``value``; ``fallback`` when ``data`` was not read from a table (a
+    :class:`TableDict`) or has no such row."""
+    table = getattr(data, "table", None)
+    for i, row in enumerate(table.rows if table is not None else []):
+        if row.get(column) == value:
+            return table.where(i, column)
+    return fallback
 
 
 def _header(path: Path, what: str, header: list[str], columns: Sequence[Column], extra: bool):
@@ -181,6 +206,7 @@ def read_table(
     key: Iterable[str] = (),
     extra: bool = False,
     text: str | None = None,
+    error: type = TableError,
 ) -> Table:
     """Read a CSV table with a header line, refusing what it cannot use (see the module).
 
@@ -200,6 +226,9 @@ def read_table(
         instead of refusing them.
     text : str, optional
         The table's text, already read (``path`` then only names it).
+    error : type, default TableError
+        The exception raised (a subclass of ``ValueError``, e.g. the caller's own), also
+        by the :class:`Table`'s checks.
 
     Returns
     -------
@@ -208,10 +237,20 @@ def read_table(
     Raises
     ------
     TableError
-        One line naming the file, the line and the column (see the module); an
-        unreadable file or a table without data rows.
+        (Or ``error``.) One line naming the file, the line and the column (see the
+        module); an unreadable file or a table without data rows.
     """
-    path = Path(path)
+    try:
+        table = _read(Path(path), tuple(columns), what, tuple(key), extra, text)
+    except TableError as exc:
+        if error is TableError:
+            raise
+        raise error(str(exc)) from None
+    table.error_type = error
+    return table
+
+
+def _read(path: Path, columns, what: str, key: tuple, extra: bool, text: str | None) -> Table:
     if text is None:
         try:
             text = path.read_text(encoding="utf-8-sig")
@@ -227,7 +266,6 @@ def read_table(
         kinds = {c.name: c for c in columns}
         table = Table(path, what, tuple(names))
         seen: dict[tuple, int] = {}
-        key = tuple(key)
         for cells in reader:
             line = reader.line_num
             if not any(c.strip() for c in cells):

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..meshes.mesh_io import WRITE_EXTENSIONS
+from ..recommendations import RECOMMENDED_ALPHA2
 from .cli_types import (
     UsageError,
     existing_file,
@@ -62,9 +63,6 @@ MESH_FORMATS = tuple(sorted(ext.lstrip(".") for ext in WRITE_EXTENSIONS))
 JOBS_DEFAULT = -1
 #: Permutations per test by default.
 PERMUTATIONS_DEFAULT = 10000
-#: The alpha^2 of group statistics with an LDDMM transport (docs/population.md, "Which to
-#: use when": never an LDDMM transport at small alpha^2 for group statistics).
-RECOMMENDED_ALPHA2 = 100.0
 
 
 def add_output(p, default: str | None, what: str, *, file_type=None) -> None:
@@ -77,8 +75,8 @@ def add_output(p, default: str | None, what: str, *, file_type=None) -> None:
 def add_jobs(p) -> None:
     """``--jobs/-j N``: workers of the batch (-1: one per core)."""
     p.add_argument("--jobs", "-j", type=jobs_count, default=JOBS_DEFAULT, metavar="N",
-                   help="workers of the batch (subjects or images at a time; -1: one per core); "
-                        "with --backend dask, the tasks the cluster runs at a time")  # fmt: skip
+                   help="workers of the batch: subjects or images at a time (-1: one per "
+                        "core)")  # fmt: skip
 
 
 def add_no_progress(p) -> None:

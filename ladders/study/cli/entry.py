@@ -66,6 +66,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     standard error without a traceback; 3 for an internal error, reported as
     one line saying where the full traceback was written; 130 if interrupted.
     """
+    from ladders.tables import TableError
     from manifolds.errors import ManifoldError
 
     from ..errors import CohortError
@@ -81,7 +82,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _closed_pipe()
     except UsageError as exc:
         return _fail(str(exc), EXIT_USAGE)
-    except (CohortError, ManifoldError) as exc:
+    except (CohortError, ManifoldError, TableError) as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)
     except OSError as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)

@@ -143,6 +143,7 @@ def _add_model_arguments(p) -> None:
         "--control-point-spacing",
         type=positive_float,
         default=d.control_point_spacing,
+        metavar="MM",
         help="spacing of the 'vertices', 'grid' and 'finegrid' control points (mesh units); "
         "default: the policy's multiple of sigma",
     )

@@ -46,8 +46,9 @@ import numpy as np
 from ..batch import run_batch
 from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
-from ..preparation.landmarks import LANDMARKS_FILE, Landmarks, write_landmarks
+from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
+from .meshing_landmarks import PHASES, ed_landmarks, folder_landmarks, landmarks_of, subject_phase
 from .plane_table import image_names, plane_for
 from .septum import SEPTUM_METHODS, landmarks_from_labels
 from .series_frames import least_volume_frame
@@ -57,7 +58,6 @@ __all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images",
 
 #: The batch's table of files, written into the output folder.
 REPORT_FILE = "meshing.csv"
-_PHASES = ("ed", "es")
 
 
 @dataclass(frozen=True)
@@ -103,15 +103,7 @@ class MeshingOutcome:
     @property
     def landmarks(self) -> dict:
         """``{subject: Landmarks}`` of the end-diastolic meshes made or reused by this run."""
-        return _ed_landmarks(self.records)
-
-
-def _subject_phase(stem: str) -> tuple[str, str | None]:
-    low = stem.lower()
-    for phase in _PHASES:
-        if low.endswith(f"_{phase}"):
-            return stem[: -len(phase) - 1], phase
-    return stem, None
+        return ed_landmarks(self.records)
 
 
 def _shape(path: Path):
@@ -134,10 +126,10 @@ def _series_tasks(path: Path, stem: str, frames, label: int, ext: str) -> list[M
         try:
             es, found = least_volume_frame(path, label)
         except ImageError as exc:
-            return [MeshingTask(path, None, f"{stem}_{phase}{ext}", str(exc)) for phase in _PHASES]
+            return [MeshingTask(path, None, f"{stem}_{phase}{ext}", str(exc)) for phase in PHASES]
         chosen, how, volumes = (0, es), ("first frame", "least volume"), tuple(found)
     return [MeshingTask(path, int(frame), f"{stem}_{phase}{ext}", how=h, volumes=volumes)
-            for phase, frame, h in zip(_PHASES, chosen, how)]  # fmt: skip
+            for phase, frame, h in zip(PHASES, chosen, how)]  # fmt: skip
 
 
 def plan_meshing(
@@ -156,7 +148,7 @@ def plan_meshing(
         if shape is not None and len(shape) == 4 and (shape[3] > 1 or frames is not None):
             tasks.extend(_series_tasks(path, stem, frames, label, ext))
             continue
-        subject, phase = _subject_phase(stem)
+        subject, phase = subject_phase(stem)
         task = MeshingTask(path, None, f"{stem}{ext}")
         tasks.append(task)
         if phase is not None:
@@ -174,39 +166,6 @@ def plan_meshing(
             )
             tasks = [replace(t, error=message) if t in pair.values() else t for t in tasks]
     return tasks
-
-
-def _ed_landmarks(records: list) -> dict:
-    """``{subject: Landmarks}`` of the records of end-diastolic meshes that have landmarks."""
-    table = {}
-    for r in records:
-        subject, phase = _subject_phase(Path(r["mesh"]).stem)
-        if r["status"] != "failed" and phase == "ed" and r.get("landmarks") is not None:
-            table[subject] = Landmarks.from_array(r["landmarks"])
-    return table
-
-
-def _folder_landmarks(folder: Path, ext: str, records: list) -> dict:
-    """``{subject: Landmarks}`` of every end-diastolic mesh of ``folder`` with landmarks.
-
-    This run's records first: its meshes made or reused, none for its failed images;
-    then the meshes of the folder this run did not touch (an earlier run on other
-    images), from their provenance records.
-    """
-    table = _ed_landmarks(records)
-    touched = {r["mesh"] for r in records}
-    for mesh in sorted(folder.glob(f"*{ext}")):
-        subject, phase = _subject_phase(mesh.stem)
-        if phase != "ed" or mesh.name in touched or subject in table:
-            continue
-        try:
-            record = json.loads(mesh.with_suffix(".json").read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            continue
-        landmarks = _landmarks_of(record) if isinstance(record, dict) else None
-        if landmarks is not None:
-            table[subject] = Landmarks.from_array(landmarks)
-    return dict(sorted(table.items()))
 
 
 def _matching_record(
@@ -232,18 +191,9 @@ def _matching_record(
         and record.get("settings") == settings.as_dict()
     )
     if rv_label is not None:  # the landmarks of this RV label are part of the result
-        same = (same and record.get("rv_label") == rv_label and _landmarks_of(record) is not None
+        same = (same and record.get("rv_label") == rv_label and landmarks_of(record) is not None
                 and record.get("rv_septum", "centroid") == rv_septum)  # fmt: skip
     return record if same else None
-
-
-def _landmarks_of(record: dict) -> list | None:
-    """The landmarks (3 x 3 nested list) of a provenance record, None if it has none usable."""
-    entry = record.get("landmarks")
-    try:
-        return Landmarks(*(entry[k] for k in ("apex", "base", "septum"))).as_array().tolist()
-    except (TypeError, KeyError, ValueError):
-        return None
 
 
 def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict | None):
@@ -281,7 +231,7 @@ def _meshed(
                               rv_septum)  # fmt: skip
     if record is None:
         return None
-    landmarks = None if rv_label is None else _landmarks_of(record)
+    landmarks = None if rv_label is None else landmarks_of(record)
     return {**_row(task), "status": "skipped", "landmarks": landmarks}
 
 
@@ -426,5 +376,5 @@ def mesh_label_images(
         with atomic_path(folder / REPORT_FILE) as tmp:
             tmp.write_text(_report_csv(records), encoding="utf-8")
         if landmarks_file is not None:
-            write_landmarks(landmarks_file, _folder_landmarks(folder, ext, records))
+            write_landmarks(landmarks_file, folder_landmarks(folder, ext, records))
     return MeshingOutcome(folder, records, landmarks_file)

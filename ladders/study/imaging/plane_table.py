@@ -20,7 +20,14 @@ from pathlib import Path
 
 from ladders.tables import Column, Table, read_table
 
-__all__ = ["PLANE_COLUMNS", "read_plane_table", "check_plane_table", "planes_by_image"]
+__all__ = [
+    "PLANE_COLUMNS",
+    "read_plane_table",
+    "check_plane_table",
+    "planes_by_image",
+    "plane_for",
+    "image_names",
+]
 
 #: The columns of a cut-plane table (``frame`` optional: empty or absent for every frame).
 PLANE_COLUMNS = (

@@ -30,6 +30,7 @@ from ..batch import run_batch
 from ..errors import CohortError
 from ..files import array_digest, atomic_path, atomic_write_text, config_hash
 from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
+from ..recommendations import RECOMMENDED_ALPHA2
 from ..running.pipeline import StudyConfig, make_space
 from .frame_transport import check_frames, transport_frames
 
@@ -148,7 +149,7 @@ def run_cycle_study(
     faces,
     sequences: dict,
     output,
-    alpha2: float = 1.0,
+    alpha2: float = RECOMMENDED_ALPHA2,
     deformation: str = "lddmm",
     use_residuals: bool = True,
     jobs: int = 1,
@@ -166,8 +167,9 @@ def run_cycle_study(
         in order (:func:`read_tracked_frames`); ED first, in the atlas's correspondence.
     output : path
         The folder written (see the module).
-    alpha2 : float, default 1
-        The regularisation ``alpha^2`` of eq. 3.
+    alpha2 : float, default 100
+        The regularisation ``alpha^2`` of eq. 3; the default is the value for group
+        statistics (:data:`~ladders.study.recommendations.RECOMMENDED_ALPHA2`).
     deformation : {"lddmm", "svf"}
     use_residuals : bool, default True
     jobs : int, default 1
