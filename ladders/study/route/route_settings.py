@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import CohortError
+from ..recommendations import RECOMMENDED_ALPHA2
 
 if sys.version_info >= (3, 11):
     import tomllib
