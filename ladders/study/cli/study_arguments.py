@@ -16,6 +16,7 @@ from .cli_types import (
     positive_int,
     scheduler_address,
 )
+from .plugin_arguments import deformation_names, registered_names
 from .preparation_arguments import add_units_arguments
 
 __all__ = [
@@ -229,10 +230,13 @@ def _add_model_arguments(p) -> None:
     )
     p.add_argument(
         "--deformation",
-        choices=("lddmm", "svf", "both"),
+        type=deformation_names,
         default="lddmm",
-        help="deformation model: LDDMM geodesics, stationary velocity fields (docs/svf.md), or "
-        "both (run into OUTPUT/lddmm and OUTPUT/svf, compared in OUTPUT/comparison.md)",
+        help="deformation model, a registered name (" + ", ".join(registered_names()) + "; "
+        "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "
+        "comma-separated (each run into OUTPUT/NAME, compared with the first in "
+        "OUTPUT/comparison.md); 'both' is lddmm,svf. A model of your own: --plugin "
+        "(docs/add_your_own_space.md)",
     )
     p.add_argument(
         "--kernel-backend",

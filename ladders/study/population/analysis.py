@@ -148,13 +148,13 @@ def read_planted_region(path) -> PlantedRegion:
 
 
 def _main(comparisons: list[GroupComparison]) -> GroupComparison:
-    """The pole ladder with residuals at the alpha^2 nearest 1 (else the first motion)."""
+    """The pole ladder with residuals at the alpha^2 nearest 1 (else the first motion), of the
+    first deformation model among the motions (``lddmm`` before ``svf``: their folders' order)."""
     ladders = [c for c in comparisons if c.motion.method == "pole_ladder_residual"]
     if not ladders:
         return comparisons[0]
-    return min(
-        ladders, key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2)))
-    )
+    first = ladders[0].motion.deformation
+    return min(ladders, key=lambda c: (c.motion.deformation != first, abs(np.log(c.motion.alpha2))))
 
 
 def analyze(

@@ -77,15 +77,17 @@ def check_design_table(table: dict, subjects: list[str]) -> tuple[list[str], lis
 
 
 def main_comparison(comparisons: list[ModelComparison]) -> list[ModelComparison]:
-    """Per contrast, the pole ladder with residuals at the alpha^2 nearest 1 (else the first)."""
+    """Per contrast, the pole ladder with residuals at the alpha^2 nearest 1 (else the first),
+    of the first deformation model among the motions."""
     out = []
     for name in dict.fromkeys(c.contrast for c in comparisons):
         same = [c for c in comparisons if c.contrast == name]
         ladders = [c for c in same if c.motion.method == "pole_ladder_residual"]
+        first = ladders[0].motion.deformation if ladders else None
         out.append(
             min(
                 ladders,
-                key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2))),
+                key=lambda c: (c.motion.deformation != first, abs(np.log(c.motion.alpha2))),
             )  # fmt: skip
             if ladders
             else same[0]
