@@ -118,17 +118,20 @@ def _same_class(a: type, b: type) -> bool:
         return True
 
     def where(cls):
-        module = sys.modules.get(cls.__module__)
-        path = getattr(module, "__file__", None)
+        codes = [v.__code__ for v in vars(cls).values() if hasattr(v, "__code__")]
+        path = codes[0].co_filename if codes else None  # found without sys.modules
         return cls.__qualname__, str(Path(path).resolve()) if path else None
 
     return where(a)[1] is not None and where(a) == where(b)
 
 
 def unregister_deformation(name: str) -> None:
-    """Forget the model registered as ``name`` (nothing happens if there is none)."""
+    """Forget the model registered as ``name`` (nothing happens if there is none), and the
+    plugin that registered it, so that loading the plugin again registers it again."""
     _MODELS.pop(name, None)
-    _SOURCES.pop(name, None)
+    source = _SOURCES.pop(name, None)
+    if source is not None and source not in _SOURCES.values():
+        _LOADED.pop(source, None)
 
 
 def load_plugin(spec: str):
