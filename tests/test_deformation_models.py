@@ -221,6 +221,13 @@ def test_cli_refuses_a_broken_plugin_before_any_study(tmp_path, capsys):
         assert len(err.splitlines()) == 1
         assert "deformation model 'double-log' (Flat): log inverts exp" in err
         assert not (out / "lddmm").exists()  # not even the first model's study started
+        # the validation of the same model, on the command line: status 1, one line
+        argv = ["validate", "--plugin", str(path), "--deformation", "double-log", "-o",
+                str(tmp_path / "val")]  # fmt: skip
+        assert main(argv) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "log inverts exp" in err
+        assert (tmp_path / "val" / "deformation_double-log.md").is_file()
     finally:
         unregister_deformation("double-log")
     assert main(["study", "--deformation", "nope", "-o", str(out)]) == 2
@@ -296,3 +303,21 @@ def test_plugins_from_the_environment_and_entry_points(tmp_path, monkeypatch):
             deformation_names()
     finally:
         unregister_deformation("test-pdm")
+
+
+def test_the_cycle_study_runs_on_a_model_of_ones_own(tmp_path):
+    """Every frame's deformation carried to the atlas by the PDM's exact ladder: S_t - S_0."""
+    from ladders.study.sequences import run_cycle_study, transport_frames
+
+    subject = COHORT.subjects[1]
+    frames = np.stack([subject.ed, 0.5 * (subject.ed + subject.es), subject.es])
+    model = PDM()
+    space = model.make_space(COHORT.atlas, 1.0, StudyConfig().registration)
+    result = transport_frames(space, COHORT.atlas, frames, model=model)
+    np.testing.assert_allclose(result.transported, COHORT.atlas + (frames - frames[0]), atol=1e-10)
+    assert result.converged.all() and np.all(result.registration_rms < 1e-12)
+    outcome = run_cycle_study(COHORT.atlas, COHORT.faces, {"s1": frames}, tmp_path,
+                              deformation=model)  # fmt: skip
+    assert outcome.computed == ["s1"] and not outcome.failures
+    with np.load(tmp_path / "s1.npz") as stored:
+        np.testing.assert_allclose(stored["transported"], result.transported, atol=1e-12)

@@ -21,6 +21,7 @@ from .cli_types import (
     positive_float,
     positive_int,
 )
+from .plugin_arguments import add_plugin_argument, one_deformation, registered_names
 
 __all__ = ["add_cycle_parsers", "run_cycle_study_command", "run_cycle_analyze_command"]
 
@@ -50,7 +51,10 @@ def add_cycle_parsers(sub) -> None:
                    help="the study's folder")  # fmt: skip
     p.add_argument("--alpha2", type=positive_float, default=1.0,
                    help="the regularisation alpha^2 of the registrations (eq. 3)")  # fmt: skip
-    p.add_argument("--deformation", choices=("lddmm", "svf"), default="lddmm")
+    p.add_argument("--deformation", type=one_deformation, default="lddmm",
+                   help="deformation model, a registered name (" + ", ".join(registered_names())
+                   + "; a model of your own: --plugin)")  # fmt: skip
+    add_plugin_argument(p)
     p.add_argument("--sigma", type=positive_float, default=10.0, help="kernel width (mm)")
     p.add_argument("--jobs", type=jobs_count, default=2, help="subjects in parallel")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -17,6 +17,7 @@ from .cli_types import UsageError
 __all__ = [
     "add_plugin_argument",
     "deformation_names",
+    "one_deformation",
     "registered_names",
     "preload_plugins",
     "PluginAction",
@@ -42,6 +43,13 @@ def deformation_names(text: str) -> str:
     except DeformationModelError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
     return text
+
+
+def one_deformation(text: str) -> str:
+    """The value of a ``--deformation`` that takes one registered model's name."""
+    if "," in text or text == "both":
+        raise argparse.ArgumentTypeError(f"expected one model's name, got {text!r}")
+    return deformation_names(text)
 
 
 class PluginAction(argparse.Action):

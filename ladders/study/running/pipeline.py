@@ -226,10 +226,11 @@ def _own_transport(config, space, t, s, s2):
 
 
 def _pole_ladder_tangent(config, space, sp, t, reflected):
-    """Coordinates and residual of the pole ladder's tangent ``-Log_T(T'')`` (cached registration)."""
+    """Coordinates and residual of the pole ladder's tangent ``-Log_T(T'')`` (cached registration);
+    a residual space whose tangents are not :class:`~manifolds.ResidualTangent` has none."""
     tangent = -sp.log(t, reflected)
-    coordinates = config.model.tangent_coordinates(space, t, tangent.tangent)
-    residual = tangent.residual if sp.use_residuals else None
+    coordinates = config.model.tangent_coordinates(space, t, getattr(tangent, "tangent", tangent))
+    residual = getattr(tangent, "residual", None) if getattr(sp, "use_residuals", False) else None
     return coordinates, residual
 
 

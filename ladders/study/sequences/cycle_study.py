@@ -130,7 +130,8 @@ def _transport_one(name, frames, atlas, faces, config, use_residuals, settings, 
         x = _load(frames, faces, len(atlas), name)
         fingerprint = _fingerprint(settings, x)
         space = make_space(config, atlas, config.alpha2[0])
-        result = transport_frames(space, atlas, x, use_residuals=use_residuals)
+        result = transport_frames(space, atlas, x, use_residuals=use_residuals,
+                                  model=config.model)  # fmt: skip
         with atomic_path(output / f"{name}.npz") as tmp, open(tmp, "wb") as fh:
             np.savez(fh, transported=result.transported, registration_rms=result.registration_rms,
                      converged=result.converged, seconds=result.seconds,
@@ -168,7 +169,9 @@ def run_cycle_study(
         The folder written (see the module).
     alpha2 : float, default 1
         The regularisation ``alpha^2`` of eq. 3.
-    deformation : {"lddmm", "svf"}
+    deformation : str or DeformationModel
+        A registered deformation model's name (``"lddmm"``, ``"svf"``, any a user
+        registers) or a model.
     use_residuals : bool, default True
     jobs : int, default 1
         Subjects in parallel (joblib processes).
