@@ -16,7 +16,7 @@ from .cli_types import UsageError
 
 __all__ = [
     "add_plugin_argument",
-    "deformation_names",
+    "deformation_list",
     "one_deformation",
     "registered_names",
     "preload_plugins",
@@ -32,7 +32,7 @@ def registered_names() -> tuple[str, ...]:
     return deformation_names(strict=False)
 
 
-def deformation_names(text: str) -> str:
+def deformation_list(text: str) -> str:
     """The value of ``--deformation``, checked: registered names, comma-separated, or
     ``both`` (``lddmm,svf``); returned as given (:func:`~ladders.study.deformations.parse_deformations`
     splits it)."""
@@ -49,7 +49,7 @@ def one_deformation(text: str) -> str:
     """The value of a ``--deformation`` that takes one registered model's name."""
     if "," in text or text == "both":
         raise argparse.ArgumentTypeError(f"expected one model's name, got {text!r}")
-    return deformation_names(text)
+    return deformation_list(text)
 
 
 class PluginAction(argparse.Action):

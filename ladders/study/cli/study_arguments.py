@@ -16,7 +16,7 @@ from .cli_types import (
     positive_int,
     scheduler_address,
 )
-from .plugin_arguments import deformation_names, registered_names
+from .plugin_arguments import deformation_list, registered_names
 from .preparation_arguments import add_units_arguments
 
 __all__ = [
@@ -230,7 +230,7 @@ def _add_model_arguments(p) -> None:
     )
     p.add_argument(
         "--deformation",
-        type=deformation_names,
+        type=deformation_list,
         default="lddmm",
         help="deformation model, a registered name (" + ", ".join(registered_names()) + "; "
         "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "

@@ -8,8 +8,9 @@ to every worker process of a study in one of three ways:
   registered so, by :mod:`ladders.study.deformations.lddmm` and ``.svf``);
 * a plugin named in the environment variable :data:`PLUGINS_VARIABLE`
   (``SYMLADDERS_PLUGINS``): module names or paths of ``.py`` files, separated by
-  ``os.pathsep``, imported when a name is first looked up; or ``symladders
-  --plugin MODULE_OR_FILE``, which loads it the same way;
+  ``os.pathsep``, imported when a name is first looked up; or ``--plugin
+  MODULE_OR_FILE`` of ``symladders study``, ``cycle-study`` and ``validate``, which
+  loads it the same way;
 * an installed package's entry point in the group :data:`ENTRY_POINT_GROUP`
   (``symladders.deformations``): ``pdm = "my_package.models:PointDistributionModel"``
   (a class or an instance), loaded when a name is first looked up.
