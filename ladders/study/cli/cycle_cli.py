@@ -53,7 +53,7 @@ def add_cycle_parsers(sub) -> None:
                    help="the regularisation alpha^2 of the registrations (eq. 3): one value, the "
                         "one for group statistics (docs/population.md, 'Which to use when': "
                         "never an LDDMM transport at small alpha^2)")  # fmt: skip
-    p.add_argument("--deformation", type=one_deformation, default="lddmm",
+    p.add_argument("--deformation", type=one_deformation, default="lddmm", metavar="NAME",
                    help="deformation model of the registrations and the pole ladder, a "
                         "registered name (" + ", ".join(registered_names())
                    + "; a model of your own: --plugin)")  # fmt: skip

@@ -214,6 +214,7 @@ def _add_model_arguments(p) -> None:
         "--deformation",
         type=deformation_list,
         default="lddmm",
+        metavar="NAME[,NAME...]",
         help="deformation model, a registered name (" + ", ".join(registered_names()) + "; "
         "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "
         "comma-separated (each run into OUTPUT/NAME, compared with the first in "
