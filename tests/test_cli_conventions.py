@@ -34,8 +34,8 @@ EXCEPTIONS = {
     ("--vertices", "mesh"): "a decimation target (0: no decimation); study and cohort build "
     "meshes of N >= 1 vertices",
     ("--vertices", "track"): "as mesh's: the decimation target of every frame's surface",
-    ("--deformation", "cycle-study"): "LDDMM or SVF: a cycle study does not compare the two "
-    "('both' of study)",
+    ("--deformation", "study"): "the study runs and compares several models, NAME[,NAME...] "
+    "('both': lddmm,svf); cycle-study and validate run one",
 }
 #: cycle-analyze still takes --compare GROUP REFERENCE, --seed of any integer, an --output
 #: without metavar and a --permutations without help; its parser is to use the shared

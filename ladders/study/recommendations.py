@@ -26,9 +26,10 @@ MAIN_METHOD = "pole_ladder_residual"
 
 
 def main_motion(items: Sequence, motion: Callable = lambda item: item.motion):
-    """The item whose motion the docs tell users to read first: the LDDMM pole ladder with
-    residuals (else the SVF one) at the alpha^2 nearest :data:`RECOMMENDED_ALPHA2` (on a
-    log scale); the first item when no motion is the pole ladder with residuals.
+    """The item whose motion the docs tell users to read first: the pole ladder with
+    residuals of the first deformation model among the items (LDDMM before SVF: their
+    folders' order) at the alpha^2 nearest :data:`RECOMMENDED_ALPHA2` (on a log scale);
+    the first item when no motion is the pole ladder with residuals.
 
     ``motion(item)`` is the item's :class:`~ladders.study.population.TransportedMotion`
     (with ``method``, ``deformation``, ``alpha2``).
@@ -36,7 +37,8 @@ def main_motion(items: Sequence, motion: Callable = lambda item: item.motion):
     ladders = [item for item in items if motion(item).method == MAIN_METHOD]
     if not ladders:
         return items[0]
+    first = motion(ladders[0]).deformation
     return min(ladders, key=lambda item: (
-        motion(item).deformation != "lddmm",
+        motion(item).deformation != first,
         abs(math.log(motion(item).alpha2 / RECOMMENDED_ALPHA2)),
     ))  # fmt: skip

@@ -21,6 +21,7 @@ from .cli_types import (
     positive_int,
 )
 from .common_arguments import RECOMMENDED_ALPHA2, add_batch_arguments, add_output, parallel_backend
+from .plugin_arguments import add_plugin_argument, one_deformation, registered_names
 from .preparation_arguments import mesh_file
 
 __all__ = ["add_cycle_parsers", "run_cycle_study_command", "run_cycle_analyze_command"]
@@ -52,9 +53,11 @@ def add_cycle_parsers(sub) -> None:
                    help="the regularisation alpha^2 of the registrations (eq. 3): one value, the "
                         "one for group statistics (docs/population.md, 'Which to use when': "
                         "never an LDDMM transport at small alpha^2)")  # fmt: skip
-    p.add_argument("--deformation", choices=("lddmm", "svf"), default="lddmm",
-                   help="deformation model of the registrations and the pole ladder: LDDMM "
-                        "geodesics or stationary velocity fields (docs/svf.md)")  # fmt: skip
+    p.add_argument("--deformation", type=one_deformation, default="lddmm", metavar="NAME",
+                   help="deformation model of the registrations and the pole ladder, a "
+                        "registered name (" + ", ".join(registered_names())
+                   + "; a model of your own: --plugin)")  # fmt: skip
+    add_plugin_argument(p)
     p.add_argument("--sigma", type=positive_float, default=10.0, help="kernel width (mm)")
     add_batch_arguments(p)
     p.set_defaults(run=run_cycle_study_command, output_is_file=False)

@@ -30,6 +30,7 @@ from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
 from .cycle_cli import add_cycle_parsers
 from .mesh_cli import add_mesh_parser
+from .plugin_arguments import preload_plugins
 from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
@@ -71,11 +72,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     from ..errors import CohortError
 
-    parser = build_parser()
     command = "symladders"
     args = None
     try:
-        args = parser.parse_args(argv)
+        preload_plugins(sys.argv[1:] if argv is None else argv)
+        args = build_parser().parse_args(argv)
         command = f"symladders {args.command}"
         return args.run(args)
     except BrokenPipeError:

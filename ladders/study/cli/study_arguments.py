@@ -10,6 +10,7 @@ from .common_arguments import (
     add_output,
     add_seed,
 )
+from .plugin_arguments import deformation_list, registered_names
 from .preparation_arguments import add_units_arguments, mesh_file
 
 __all__ = [
@@ -211,10 +212,14 @@ def _add_model_arguments(p) -> None:
     )
     p.add_argument(
         "--deformation",
-        choices=("lddmm", "svf", "both"),
+        type=deformation_list,
         default="lddmm",
-        help="deformation model: LDDMM geodesics, stationary velocity fields (docs/svf.md), or "
-        "both (run into OUTPUT/lddmm and OUTPUT/svf, compared in OUTPUT/comparison.md)",
+        metavar="NAME[,NAME...]",
+        help="deformation model, a registered name (" + ", ".join(registered_names()) + "; "
+        "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "
+        "comma-separated (each run into OUTPUT/NAME, compared with the first in "
+        "OUTPUT/comparison.md); 'both' is lddmm,svf. A model of your own: --plugin "
+        "(docs/add_your_own_space.md)",
     )
     p.add_argument(
         "--kernel-backend",

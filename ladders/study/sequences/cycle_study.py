@@ -131,7 +131,8 @@ def _transport_one(name, frames, atlas, faces, config, use_residuals, settings, 
         x = _load(frames, faces, len(atlas), name)
         fingerprint = _fingerprint(settings, x)
         space = make_space(config, atlas, config.alpha2[0])
-        result = transport_frames(space, atlas, x, use_residuals=use_residuals)
+        result = transport_frames(space, atlas, x, use_residuals=use_residuals,
+                                  model=config.model)  # fmt: skip
         with atomic_path(output / f"{name}.npz") as tmp, open(tmp, "wb") as fh:
             np.savez(fh, transported=result.transported, registration_rms=result.registration_rms,
                      converged=result.converged, seconds=result.seconds,
@@ -170,7 +171,9 @@ def run_cycle_study(
     alpha2 : float, default 100
         The regularisation ``alpha^2`` of eq. 3; the default is the value for group
         statistics (:data:`~ladders.study.recommendations.RECOMMENDED_ALPHA2`).
-    deformation : {"lddmm", "svf"}
+    deformation : str or DeformationModel
+        A registered deformation model's name (``"lddmm"``, ``"svf"``, any a user
+        registers) or a model.
     use_residuals : bool, default True
     jobs : int, default 1
         Subjects in parallel (joblib processes).
