@@ -147,8 +147,11 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
         steps.append(Step("track", "track", argv, [corresponded, inputs.series], [tracked], [],
                           f"{len(table.tracked)} subject(s) followed through their series"))  # fmt: skip
     study = out / "study"
-    argv = ["--meshes", corresponded, "--alpha2", alpha2, "--deformation",
-            settings["transport"]["deformation"], "--no-meshes", "-o", study, *batch]  # fmt: skip
+    model_argv = ["--deformation", settings["transport"]["deformation"]]
+    for plugin in settings["transport"]["plugins"]:
+        model_argv += ["--plugin", plugin]
+    argv = ["--meshes", corresponded, "--alpha2", alpha2, *model_argv, "--no-meshes", "-o", study,
+            *batch]  # fmt: skip
     steps.append(Step("study", "study", argv, [corresponded], [study], [],
                       f"every subject's ED-ES motion transported to the atlas (alpha^2 {alpha2})"))  # fmt: skip
     aha = atlas_dir / "atlas_landmarks.csv"
@@ -166,8 +169,8 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
                           design=design, design_from=study))  # fmt: skip
     if track:
         cycle = out / "cycle_study"
-        argv = [tracked, "--atlas", corresponded / "atlas.vtk", "--alpha2", alpha2, "-o", cycle,
-                *batch]  # fmt: skip
+        argv = [tracked, "--atlas", corresponded / "atlas.vtk", "--alpha2", alpha2, *model_argv,
+                "-o", cycle, *batch]  # fmt: skip
         steps.append(Step("cycle-study", "cycle-study", argv, [tracked, corresponded], [cycle], [],
                           "every tracked frame transported to the atlas"))  # fmt: skip
         if _comparable(table, model):

@@ -226,6 +226,9 @@ def _value(path: Path, name: str, spec: _Key, value):
         if not isinstance(value, str) or not value.strip():
             _fail(path, name, f"expected a non-empty string, got {value!r}")
         return value.strip()
+    if kind == "plugins":  # module names, or .py files relative to the settings file
+        names = _value(path, name, _Key("list", [], ""), value)
+        return [str((path.parent / n).resolve()) if n.endswith(".py") else n for n in names]
     if kind == "list":
         if isinstance(value, str):
             value = [value]
