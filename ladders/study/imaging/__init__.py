@@ -30,7 +30,7 @@ from .cine import (
     tag_pattern,
     write_series,
 )
-from .epicardium import epicardial_image, extract_epicardium
+from .epicardium import EPICARDIUM_FOLDER, epicardial_image, extract_epicardium
 from .label_images import (
     IMAGE_SUFFIXES,
     ImageError,
@@ -68,6 +68,7 @@ __all__ = [
     "cut_at_plane",
     "remove_lid",
     "extract_surface",
+    "EPICARDIUM_FOLDER",
     "epicardial_image",
     "extract_epicardium",
     "close_surface",

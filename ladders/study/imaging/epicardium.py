@@ -19,7 +19,11 @@ from scipy import ndimage
 from .label_images import ImageError, LabelImage
 from .surface_extraction import MeshingSettings, SurfaceReport, extract_surface
 
-__all__ = ["epicardial_image", "extract_epicardium"]
+__all__ = ["EPICARDIUM_FOLDER", "epicardial_image", "extract_epicardium"]
+
+#: The sub-folder of a mesh folder (``symladders mesh --myocardium-label``) or of a tracked
+#: subject's folder (``symladders track``) that holds the epicardia.
+EPICARDIUM_FOLDER = "epicardium"
 
 
 def _label(value, name: str) -> int:

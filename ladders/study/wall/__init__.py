@@ -9,17 +9,30 @@
 - :mod:`.maps`: a subject's maps through the cycle (:func:`wall_maps`,
   :class:`WallMaps`), their peaks and AHA segment curves;
 - :mod:`.truth`: the synthetic ventricle's true maps, from the generator's exact
-  surfaces and motion (:func:`true_wall_maps`, :func:`true_epicardium`).
+  surfaces and motion (:func:`true_wall_maps`, :func:`true_epicardium`);
+- :mod:`.cohort_wall`: every tracked subject's maps, per vertex and AHA segment, a
+  resumable batch (:func:`run_wall_maps`, ``symladders wall``);
+- :mod:`.wall_cycles`: a cohort's maps as the whole-cycle group tests take a measure
+  (:func:`load_wall_cycles`, ``symladders cycle-analyze --measure thickening``).
 
 See ``docs/wall_thickness_strain.md``.
 """
 
+from .cohort_wall import SEGMENT_TABLE, WALL_REPORT, WallOutcome, run_wall_maps
 from .maps import PEAK_SENSE, WALL_MEASURES, WallMaps, signed_peaks, wall_maps
 from .strain import cardiac_directions, directional_stretch, surface_strains
 from .thickness import WallThickness, thickening, wall_thickness
 from .truth import true_endocardium, true_epicardium, true_wall_maps
+from .wall_cycles import WALL_UNITS, WallCycles, load_wall_cycles
 
 __all__ = [
+    "SEGMENT_TABLE",
+    "WALL_REPORT",
+    "WallOutcome",
+    "run_wall_maps",
+    "WALL_UNITS",
+    "WallCycles",
+    "load_wall_cycles",
     "PEAK_SENSE",
     "WALL_MEASURES",
     "WallMaps",

@@ -10,7 +10,12 @@ per endocardial vertex and frame, a :class:`WallMaps`:
 * ``circumferential``, ``longitudinal``: the endocardium's Lagrangian strains of its ED
   directions (:func:`~.strain.surface_strains`);
 
-every strain dimensionless (``-0.2`` is 20 % shortening). :data:`WALL_MEASURES` names
+every strain dimensionless (``-0.2`` is 20 % shortening). The epicardium of every frame
+is first cut at the plane of that frame's endocardial rim (the base: the rim's centroid
+and least-squares plane, :func:`~ladders.study.population.valve_planes`): the lid a
+label image gives the myocardium at the valve plane, and any epicardium above the base
+the endocardium ends at, would otherwise be the closest epicardium of the basal
+vertices. :data:`WALL_MEASURES` names
 them with their units and :data:`PEAK_SENSE` the sense of their systolic peak:
 thickness, thickening and radial strain peak at their largest value, the
 circumferential and longitudinal strain at their most negative. :meth:`WallMaps.peak`
@@ -27,8 +32,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..imaging.surface_extraction import cut_at_plane
+from ..population.cycle_images import valve_planes
 from ..population.segment_table import segment_means
 from ..sequences.peaks import curve_peaks
+from ..volume import boundary_vertices
 from .strain import surface_strains
 from .thickness import thickening, wall_thickness
 
@@ -140,7 +148,16 @@ class WallMaps:
                    None if epicardium is None else np.asarray(epicardium, float))  # fmt: skip
 
 
-def wall_maps(endocardium, faces, epicardia, apex, base, scale: float = 1.0) -> WallMaps:
+def _below(vertices, faces, plane, frame: int):
+    """The epicardium's triangles below the plane (on the apex's side)."""
+    v, f = cut_at_plane(np.asarray(vertices, float), np.asarray(faces, np.int64), plane)
+    if len(f) == 0:
+        raise ValueError(f"epicardia: frame {frame}: no epicardium below the endocardium's rim")
+    return v, f
+
+
+def wall_maps(endocardium, faces, epicardia, apex, base, scale: float = 1.0,
+              cut_at_rim: bool = True) -> WallMaps:  # fmt: skip
     """A subject's wall maps at every frame (see the module).
 
     Parameters
@@ -156,6 +173,9 @@ def wall_maps(endocardium, faces, epicardia, apex, base, scale: float = 1.0) -> 
     scale : float, default 1.0
         The frame's scale relative to mm (thicknesses are divided by it; strains do not
         depend on it).
+    cut_at_rim : bool, default True
+        Cut every epicardium at the plane of the endocardium's rim (see the module);
+        an endocardium without a rim (closed) is not cut at.
 
     Returns
     -------
@@ -174,6 +194,10 @@ def wall_maps(endocardium, faces, epicardia, apex, base, scale: float = 1.0) -> 
     if len(epicardia) != len(x):
         raise ValueError(f"epicardia: expected one epicardium per frame ({len(x)}), got "
                          f"{len(epicardia)}")  # fmt: skip
+    if cut_at_rim and len(boundary_vertices(faces)) >= 3:
+        planes = valve_planes(x, faces)
+        epicardia = [_below(v, f, plane, t) for t, ((v, f), plane) in
+                     enumerate(zip(epicardia, planes))]  # fmt: skip
     measured = [wall_thickness(x[t], *epicardia[t], scale=scale) for t in range(len(x))]
     thick = np.stack([m.thickness for m in measured])
     thickening(thick)  # refuses a thickness at ED that is not > 0
