@@ -259,3 +259,53 @@ def test_the_mesh_step_writes_the_epicardium_beside_the_endocardium(cohort_folde
     assert all("myocardium label 3 is absent" in r["error"] for r in failed.records)
     with pytest.raises(ValueError, match="myocardium_label"):
         mesh_label_images([series], 1, tmp_path / "y", frames=(0, 2), myocardium_label=1)
+
+
+def _wall_folder(folder, atlas, faces, region, seed=0, n=10, n_frames=8):
+    """Wall maps of ``n`` subjects as ``symladders wall`` stores them: the patients (first
+    half) thicken by 20 % instead of 40 % in ``region``, everyone with noise."""
+    from ladders.study.wall import WallMaps
+
+    rng = np.random.default_rng(seed)
+    folder.mkdir()
+    write_mesh(folder / "atlas.vtk", atlas, faces)
+    t = np.arange(n_frames) / n_frames
+    shape = np.sin(np.pi * t)[:, None] ** 2
+    names = [f"s{i}" for i in range(n)]
+    for i, name in enumerate(names):
+        gain = np.where(region & (i < n // 2), 0.2, 0.4)
+        thickness = 9.0 * (1.0 + gain[None, :] * shape) + rng.normal(0, 0.1, (n_frames, len(atlas)))
+        strain = -0.2 * shape + rng.normal(0, 0.01, (n_frames, len(atlas)))
+        maps = WallMaps(thickness, strain, strain, np.zeros(thickness.shape, bool))
+        np.savez(folder / f"{name}.npz", **maps.as_arrays(), fingerprint="x")
+    (folder / "wall.json").write_text(json.dumps({"subjects": {s: "computed" for s in names}}))
+    return names
+
+
+def test_cycle_analyze_tests_a_wall_measure_of_the_wall_maps(tmp_path):
+    from ladders.study.sequences import compare_cycles
+
+    cohort = make_synthetic_cohort(1, n_vertices=241)
+    region = cohort.atlas[:, 0] > 10.0
+    names = _wall_folder(tmp_path / "wall", cohort.atlas, cohort.faces, region)
+    cycles = load_wall_cycles(tmp_path / "wall")
+    labels = np.arange(len(names)) < len(names) // 2
+    tests = compare_cycles(cycles, labels, 500, np.random.default_rng(0), measure="radial")
+    found = tests.peak.p_fwer < 0.05
+    assert found[region].mean() > 0.9 and found[~region].mean() < 0.05
+    assert tests.unit == "percent"
+    np.testing.assert_allclose(tests.peaks[~labels][:, region].mean(), 40.0, atol=1.0)
+    with pytest.raises(ValueError, match="need a cycle study"):
+        compare_cycles(cycles, labels, 50, np.random.default_rng(0), measure="normal")
+    groups = tmp_path / "groups.csv"
+    groups.write_text("subject,group\n" + "".join(
+        f"{s},{'patients' if p else 'controls'}\n" for s, p in zip(names, labels)))  # fmt: skip
+    status, stdout, stderr = run_cli("cycle-analyze", tmp_path / "wall", "--groups", groups,
+                                     "--compare", "patients", "controls", "--measure",
+                                     "thickening", "--permutations", 200)  # fmt: skip
+    assert status == 0, stderr
+    table = (tmp_path / "wall" / "analysis" / "cycle_vertices.csv").read_text().splitlines()
+    assert table[0].startswith("vertex,peak_group1_mm,peak_group2_mm")
+    status, _, stderr = run_cli("cycle-analyze", tmp_path / "wall", "--groups", groups,
+                                "--measure", "normal")  # fmt: skip
+    assert status == 2 and "cycle_study.json" in stderr

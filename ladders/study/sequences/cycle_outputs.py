@@ -4,7 +4,8 @@ Written by :func:`write_cycle_tests` into one folder:
 
 * ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm;
   ``peak_group1_mm``) or, with the rotation measure, signed peak rotation about the
-  long axis (degrees; ``peak_group1_deg``) and time to peak (fraction of the cycle),
+  long axis (degrees; ``peak_group1_deg``), or a wall measure's peak (mm or percent),
+  and time to peak (fraction of the cycle),
   their ``t`` and FWER-corrected p, the
   smallest per-frame p, and with the peak's TFCE test its enhanced map and FWER p
   (``peak_tfce``, ``peak_tfce_p_fwer``); when only some vertices were tested, a
@@ -12,7 +13,7 @@ Written by :func:`write_cycle_tests` into one folder:
 * ``cycle_frames.csv``: per frame, its fraction of the cycle, the vertices found at
   FWER 5 % (vertices and frames together) and the largest ``|t|``;
 * ``cycle_tests.vtu``: the atlas with those per-vertex columns as point data;
-* ``cycle_curves.png``: each group's mean curve (normal motion or rotation) through
+* ``cycle_curves.png``: each group's mean curve (the measure's) through
   the cycle, over the vertices whose peak differs (all vertices tested when none does).
 """
 
@@ -92,6 +93,17 @@ def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("gr
     return [vertices, frames, vtu, png]
 
 
+_AXIS_LABELS = {
+    "normal": "normal motion (mm, inward < 0)",
+    "rotation": "rotation (deg, counter-clockwise from the apex > 0)",
+    "thickness": "wall thickness (mm)",
+    "thickening": "wall thickening from ED (mm)",
+    "radial": "radial strain (%)",
+    "circumferential": "circumferential strain (%)",
+    "longitudinal": "longitudinal strain (%)",
+}
+
+
 def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alpha: float) -> None:
     import matplotlib
 
@@ -112,8 +124,7 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
         ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.2, lw=0)
     what = (f"{int(found.sum())} vertices whose peak differs" if found.any()
             else "all vertices tested")  # fmt: skip
-    ylabel = ("normal motion (mm, inward < 0)" if tests.measure == "normal"
-              else "rotation (deg, counter-clockwise from the apex > 0)")  # fmt: skip
+    ylabel = _AXIS_LABELS.get(tests.measure, f"{tests.measure} ({tests.unit})")
     ax.set(xlabel="fraction of the cycle", ylabel=ylabel, title=f"mean over {what}")
     ax.legend(frameon=False)
     fig.tight_layout()

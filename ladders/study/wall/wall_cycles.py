@@ -26,12 +26,13 @@ import numpy as np
 from ...statistics import SurfaceSmoother
 from ..errors import CohortError
 from ..meshes.mesh_io import read_mesh
+from ..sequences.cycle_analysis import MEASURES
 from .maps import WALL_MEASURES, WallMaps
 
 __all__ = ["WALL_UNITS", "WallCycles", "load_wall_cycles"]
 
-#: The unit of each wall measure's curves in the group tests.
-WALL_UNITS = {name: "percent" if unit == "strain" else unit for name, unit in WALL_MEASURES.items()}
+#: The unit of each wall measure's curves in the group tests (those of the cycle's tests).
+WALL_UNITS = {name: MEASURES[name] for name in WALL_MEASURES}
 
 
 @dataclass(frozen=True)
