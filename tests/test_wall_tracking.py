@@ -230,6 +230,12 @@ def test_a_cine_series_moves_the_epicardium_with_the_endocardium(tmp_path):
     assert closest_points(endo, true_endo, faces)[1].mean() < 0.9
     record = json.loads((tmp_path / "tracked" / "a.json").read_text())
     assert record["fingerprint"]["epicardium_sha256"] and record["epicardium"]["ed_mesh"]
+    from ladders.study.tracking import track_cine, wall_mask
+
+    endo_only = wall_mask(shape, affine, ed, settings.mask_distance)  # the design's alternative
+    behind = track_cine(np.stack(series), affine, np.concatenate([ed, epi_v]), settings,
+                        mask=endo_only)[2, len(ed):]  # fmt: skip
+    assert closest_points(behind[wall], *true_epi)[1].mean() > 1.3 * off
 
 
 def test_the_mesh_step_writes_the_epicardium_beside_the_endocardium(cohort_folders, tmp_path):
@@ -250,6 +256,10 @@ def test_the_mesh_step_writes_the_epicardium_beside_the_endocardium(cohort_folde
     again = mesh_label_images([series], 1, tmp_path, frames=(0, 2), progress=False,
                               myocardium_label=2, jobs=1)  # fmt: skip
     assert [r["status"] for r in again.records] == ["skipped", "skipped"]
+    from ladders.study.cohort.mesh_folder import scan_mesh_folder
+
+    _, subjects, _ = scan_mesh_folder(tmp_path)  # what correspond reads: not the epicardia
+    assert list(subjects) == [name] and sorted(subjects[name]) == ["ed", "es"]
     (tmp_path / "epicardium" / f"{name}_es.vtk").unlink()
     again = mesh_label_images([series], 1, tmp_path, frames=(0, 2), progress=False,
                               myocardium_label=2, jobs=1)  # fmt: skip

@@ -16,14 +16,11 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from ..cohort.mesh_folder import EPICARDIUM_FOLDER
 from .label_images import ImageError, LabelImage
 from .surface_extraction import MeshingSettings, SurfaceReport, extract_surface
 
 __all__ = ["EPICARDIUM_FOLDER", "epicardial_image", "extract_epicardium"]
-
-#: The sub-folder of a mesh folder (``symladders mesh --myocardium-label``) or of a tracked
-#: subject's folder (``symladders track``) that holds the epicardia.
-EPICARDIUM_FOLDER = "epicardium"
 
 
 def _label(value, name: str) -> int:
