@@ -5,11 +5,8 @@ a tracked frame); the epicardium is any triangulation of the outer surface of th
 myocardium at the same instant (:func:`~ladders.study.imaging.extract_epicardium`, or
 the epicardium followed through the cycle by ``symladders track``). The thickness at
 endocardial vertex ``x_i`` is its distance to the epicardium,
-
-    T_i = min_{y in epicardium} |x_i - y|,
-
-and ``y_i``, the closest point, is the epicardial point paired with it: the endocardial
-mesh's triangulation with its vertices moved to the ``y_i`` is an epicardium in the
+``T_i = min over y of the epicardium of |x_i - y|``, and ``y_i``, the closest point, is
+the epicardial point paired with it: the endocardial mesh's triangulation with its vertices moved to the ``y_i`` is an epicardium in the
 atlas's correspondence. Where the wall's two surfaces are parallel this is the distance
 along the normal of either; it is defined at every vertex (the apex, the base's rim)
 and does not depend on the endocardial normal, which a mesh of a label image has
