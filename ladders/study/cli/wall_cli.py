@@ -9,14 +9,9 @@ from __future__ import annotations
 
 import sys
 
-from .cli_types import (
-    DefaultsFormatter,
-    UsageError,
-    existing_file,
-    existing_folder,
-    jobs_count,
-    output_folder,
-)
+from .cli_types import DefaultsFormatter, UsageError, existing_file, existing_folder
+from .common_arguments import add_batch_arguments, add_output, parallel_backend
+from .preparation_arguments import mesh_file
 
 __all__ = ["add_wall_parser", "run_wall_command"]
 
@@ -43,15 +38,13 @@ def add_wall_parser(sub) -> None:
     )
     p.add_argument("tracked", type=existing_folder, metavar="TRACKED",
                    help="folder of <subject>/frame_<kk>.<ext> and <subject>/epicardium/")  # fmt: skip
-    p.add_argument("--atlas", type=existing_file, required=True,
+    p.add_argument("--atlas", type=mesh_file, required=True,
                    help="the atlas mesh (the tracked meshes' correspondence and frame)")  # fmt: skip
     p.add_argument("--aha", type=existing_file, required=True, metavar="LANDMARKS",
                    help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
                         "landmark table's row 'atlas'): the long axis and the AHA segments")  # fmt: skip
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/wall",
-                   help="folder of the maps and tables")  # fmt: skip
-    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects in parallel")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_output(p, "symladders-output/wall", "folder of the maps and tables")
+    add_batch_arguments(p)
     p.set_defaults(run=run_wall_command, output_is_file=False)
 
 
@@ -67,8 +60,9 @@ def run_wall_command(args) -> int:
     except ValueError as exc:
         raise UsageError(f"symladders wall: error: --aha: {exc}") from None
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
-    outcome = run_wall_maps(args.tracked, atlas, faces, landmarks, args.output, jobs=args.jobs,
-                            progress=not args.no_progress)  # fmt: skip
+    with parallel_backend(args, "wall"):
+        outcome = run_wall_maps(args.tracked, atlas, faces, landmarks, args.output,
+                                jobs=args.jobs, progress=not args.no_progress)  # fmt: skip
     n = len(outcome.computed) + len(outcome.reused) + len(outcome.failures)
     print(
         f"symladders wall: {n} subject(s): {len(outcome.computed)} measured, "
