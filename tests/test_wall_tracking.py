@@ -188,10 +188,10 @@ def test_the_command_tracks_the_epicardium_and_measures_the_wall(cohort_folders,
 
 def test_a_cine_series_moves_the_epicardium_with_the_endocardium(tmp_path):
     """The epicardium's points are moved by the registrations of the wall's voxels: at ES
-    they lie near the true epicardium (measured 1.1 mm off it, 3.3 mm unmoved; 1.9 mm with
-    the endocardium's voxels alone), and the endocardium near its own (0.59 mm; 0.55 mm
-    tracked alone). Four frames of 2.5 mm voxels, ES at frame 2; a subject without an ED
-    epicardium is named."""
+    they lie near the true epicardium (measured 0.56 mm off it, 3.3 mm unmoved; 1.8 mm with
+    the endocardium's voxels alone, the design's alternative), and the endocardium near
+    its own (0.43 mm; 0.42 mm tracked alone). Four frames of 3 mm voxels, ES at frame 2;
+    a subject without an ED epicardium is named."""
     pytest.importorskip("SimpleITK")
     from ladders.study.imaging import render_cine
     from ladders.study.surface_queries import closest_points
@@ -200,7 +200,7 @@ def test_a_cine_series_moves_the_epicardium_with_the_endocardium(tmp_path):
 
     cohort = make_synthetic_cohort(1, n_vertices=241)
     params, ed = cohort.subjects[0].parameters, np.asarray(cohort.subjects[0].ed, float)
-    voxel, low = 2.5, np.array([-50.0, -50.0, -16.0])
+    voxel, low = 3.0, np.array([-50.0, -50.0, -16.0])
     shape = tuple(int(n) for n in np.ceil((np.array([50.0, 50.0, 92.0]) - low) / voxel) + 1)
     affine = np.diag([voxel, voxel, voxel, 1.0])
     affine[:3, 3] = low
@@ -223,11 +223,11 @@ def test_a_cine_series_moves_the_epicardium_with_the_endocardium(tmp_path):
     wall = epi_v[:, 2] > 0.0  # the wall, not the cap
     true_epi = true_epicardium(params, 1.0, n_around=240, n_rings=120)
     off, still = (closest_points(x[wall], *true_epi)[1].mean() for x in (moved, epi_v))
-    assert off < 1.6 and off < 0.5 * still, (off, still)
+    assert off < 1.0 and off < 0.3 * still, (off, still)
     theta, phi, faces = lv_grid(*grid_shape(241))
     endo = read_mesh(tmp_path / "tracked" / "a" / "frame_02.vtk")[0]
     true_endo = true_endocardium(params, theta, phi, 1.0)
-    assert closest_points(endo, true_endo, faces)[1].mean() < 0.9
+    assert closest_points(endo, true_endo, faces)[1].mean() < 0.7
     record = json.loads((tmp_path / "tracked" / "a.json").read_text())
     assert record["fingerprint"]["epicardium_sha256"] and record["epicardium"]["ed_mesh"]
     from ladders.study.tracking import track_cine, wall_mask
@@ -235,7 +235,7 @@ def test_a_cine_series_moves_the_epicardium_with_the_endocardium(tmp_path):
     endo_only = wall_mask(shape, affine, ed, settings.mask_distance)  # the design's alternative
     behind = track_cine(np.stack(series), affine, np.concatenate([ed, epi_v]), settings,
                         mask=endo_only)[2, len(ed):]  # fmt: skip
-    assert closest_points(behind[wall], *true_epi)[1].mean() > 1.3 * off
+    assert closest_points(behind[wall], *true_epi)[1].mean() > 2.0 * off
 
 
 def test_the_mesh_step_writes_the_epicardium_beside_the_endocardium(cohort_folders, tmp_path):
