@@ -19,13 +19,11 @@ Written by :func:`write_cycle_tests` into one folder:
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..files import atomic_path, atomic_write_text
+from ..files import atomic_path, atomic_write_text, csv_text
 from ..meshes.mesh_outputs import write_point_mesh
 from .cycle_analysis import CycleMotion, CycleTests
 
@@ -53,14 +51,6 @@ def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     return columns
 
 
-def _csv(header, rows) -> str:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
-    return buf.getvalue()
-
-
 def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("group1", "group2"),
                       alpha: float = 0.05) -> list[Path]:  # fmt: skip
     """Write the analysis's files (see the module); return their paths.
@@ -80,12 +70,12 @@ def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("gr
     columns = _vertex_columns(tests)
     vertices = folder / "cycle_vertices.csv"
     rows = [[v, *(f"{columns[c][v]:.6g}" for c in columns)] for v in range(len(motion.atlas))]
-    atomic_write_text(vertices, _csv(["vertex", *columns], rows))
+    atomic_write_text(vertices, csv_text(["vertex", *columns], rows))
     frames = folder / "cycle_frames.csv"
     pf = tests.per_frame
     rows = [[t, f"{motion.fractions[t]:.4f}", int((pf.p_fwer[t] < alpha).sum()),
              f"{np.nanmax(np.abs(pf.statistic[t])):.4g}"] for t in range(pf.statistic.shape[0])]  # fmt: skip
-    atomic_write_text(frames, _csv(["frame", "fraction", f"vertices_p_fwer_below_{alpha:g}",
+    atomic_write_text(frames, csv_text(["frame", "fraction", f"vertices_p_fwer_below_{alpha:g}",
                                     "max_abs_t"], rows))  # fmt: skip
     vtu = write_point_mesh(folder / "cycle_tests.vtu", motion.atlas, motion.faces, columns)
     png = folder / "cycle_curves.png"
