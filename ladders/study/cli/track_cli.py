@@ -80,6 +80,16 @@ def add_track_parser(sub) -> None:
                    help="folder of label series (4-D NIfTI or folders of frames)")  # fmt: skip
     p.add_argument("--label", type=nonnegative_int, default=None,
                    help="the structure's label (required for label series)")  # fmt: skip
+    p.add_argument("--myocardium-label", type=nonnegative_int, default=None, metavar="INT",
+                   help="label series: the myocardium's label; every frame's epicardium (the "
+                        "outer surface of --label and this label) is meshed and frame 0's "
+                        "followed through them, written to <subject>/epicardium/ for "
+                        "'symladders wall' (default: no epicardium)")  # fmt: skip
+    p.add_argument("--epicardia", type=existing_folder, default=None, metavar="FOLDER",
+                   help="with --cine: a folder of ED epicardia <subject>_ed.<ext> in the images' "
+                        "world frame ('symladders mesh --myocardium-label' writes them in "
+                        "OUTPUT/epicardium), each moved with its subject's endocardium "
+                        "(default: no epicardium)")  # fmt: skip
     p.add_argument("--cine", action="store_true",
                    help="IMAGES are cine intensity series: track by image registration")  # fmt: skip
     p.add_argument("--control-point-spacing", type=positive_float, default=20.0, metavar="MM",
@@ -135,6 +145,12 @@ def run_track_command(args) -> int:
 
     if args.label is None and not args.cine:
         raise UsageError("symladders track: error: --label: required for label series (or --cine)")
+    if args.myocardium_label is not None and (args.cine or args.myocardium_label == args.label):
+        raise UsageError("symladders track: error: --myocardium-label: for label series, a label "
+                         "other than --label (with --cine, give --epicardia)")  # fmt: skip
+    if args.epicardia is not None and not args.cine:
+        raise UsageError("symladders track: error: --epicardia: with --cine only (label series "
+                         "take --myocardium-label)")  # fmt: skip
     planes = args.cut_planes and read_cut_planes(
         args.cut_planes, "track", _series_names(args.images)
     )
@@ -163,7 +179,9 @@ def run_track_command(args) -> int:
         with parallel_backend(args, "track"):
             outcome = track_cohort(args.meshes, args.images, args.output, label, settings,
                                    cut_planes=planes, jobs=args.jobs,
-                                   progress=not args.no_progress)  # fmt: skip
+                                   progress=not args.no_progress,
+                                   myocardium_label=args.myocardium_label,
+                                   epicardia=args.epicardia)  # fmt: skip
     except (SeriesError, ValueError) as exc:
         raise UsageError(f"symladders track: error: {exc}") from None
     counts = {

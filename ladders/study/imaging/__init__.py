@@ -5,6 +5,8 @@
 - :mod:`.surface_extraction`: one label to a surface (largest component, marching
   cubes in the image's world frame, Taubin smoothing, a cut plane, decimation) with a
   report (:func:`extract_surface`, :class:`MeshingSettings`);
+- :mod:`.epicardium`: the outer surface of the myocardium, cavity included
+  (:func:`extract_epicardium`), the surface wall thickness is measured to;
 - :mod:`.mesh_images`: a batch of images to a folder the study reads, resumable,
   with provenance (:func:`mesh_label_images`);
 - :mod:`.septum`: the landmarks of a meshed left ventricle, its septum placed by
@@ -28,6 +30,7 @@ from .cine import (
     tag_pattern,
     write_series,
 )
+from .epicardium import EPICARDIUM_FOLDER, epicardial_image, extract_epicardium
 from .label_images import (
     IMAGE_SUFFIXES,
     ImageError,
@@ -73,6 +76,9 @@ __all__ = [
     "cut_at_plane",
     "remove_lid",
     "extract_surface",
+    "EPICARDIUM_FOLDER",
+    "epicardial_image",
+    "extract_epicardium",
     "close_surface",
     "short_axis_affine",
     "voxelize",
