@@ -44,7 +44,9 @@ from .surface_extraction import (
     SurfaceReport,
     cut_at_plane,
     extract_surface,
+    largest_component,
     remove_lid,
+    voxel_extent,
 )
 from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
 
@@ -65,6 +67,8 @@ __all__ = [
     "cut_at_plane",
     "remove_lid",
     "extract_surface",
+    "largest_component",
+    "voxel_extent",
     "close_surface",
     "short_axis_affine",
     "voxelize",

@@ -14,6 +14,15 @@ planes anchoring the base's height where every frame has its own) and writes::
     <output>/<subject>.json             provenance: inputs' SHA-256, frames, settings,
                                          per-frame quality and meshing, versions
     <output>/tracking.csv               one row per subject: status, frames, reason
+    <output>/valve_planes.csv           the valve planes estimated from the images (the
+                                         ``--cut-planes`` table, world mm), when any was
+
+A subject given no valve plane has every frame's plane estimated from its images and
+its ED mesh's rim (:func:`~.base_planes.estimate_base_planes`) when
+``settings.estimate_planes`` says so (by default on thick slices,
+:func:`~.base_planes.thick_sliced`); the planes are then used as given ones, kept in the
+subject's record (``estimated_planes``) and gathered in ``valve_planes.csv``, which
+``cut_planes`` (``symladders track --cut-planes``) takes back, e.g. after an edit.
 
 The corresponded meshes are in the atlas's frame: where the folder holds the
 subject's record ``correspondence/<subject>.json`` (as ``symladders correspond``
@@ -46,6 +55,7 @@ from ..files import atomic_write_text, file_sha256
 from ..imaging.surface_extraction import MeshingSettings, extract_surface
 from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
 from ..preparation.alignment import SimilarityTransform
+from .base_planes import estimate_base_planes, gather_plane_table, planes_wanted
 from .cine_tracking import CineTrackingSettings, track_cine
 from .label_series import SeriesError, check_field_of_view, find_series, open_series
 from .settings import TrackingSettings
@@ -79,10 +89,13 @@ class TrackingOutcome:
     records : list of dict
         ``subject``, ``status`` (ok, skipped, failed), ``frames``, ``mean_distance``
         (largest over the frames, mm), ``error``.
+    planes_file : Path or None
+        ``valve_planes.csv``, the planes estimated from the images, when any was.
     """
 
     output: Path
     records: list = field(default_factory=list)
+    planes_file: Path | None = None
 
     @property
     def failed(self) -> list:
@@ -259,6 +272,10 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
                 track_cine(series.intensities(), series.affine, scanner, settings), faces
             )
         else:
+            if planes_wanted(settings, series.affine, faces, planes):
+                estimate = estimate_base_planes(scanner, faces, series.frames(), label)
+                record["estimated_planes"] = estimate.as_dict()
+                planes = {str(t): [float(x) for x in p] for t, p in enumerate(estimate.planes)}
             surfaces = []
             for t, image in enumerate(series.frames()):
                 v, f, report = extract_surface(
@@ -281,7 +298,8 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
             status="ok", ed_mesh=str(task.ed.resolve()), series=[str(p.resolve()) for p in series.files],
             n_frames=series.n_frames, label=int(label), frame="atlas" if transform else "images",
             affine=series.affine.tolist(), spacing_mm=np.linalg.norm(series.affine[:3, :3], axis=0).tolist(),
-            settings=settings.as_dict(), cut_planes=planes, quality=tracked.quality,
+            settings=settings.as_dict(), cut_planes=record["fingerprint"]["cut_planes"],
+            quality=tracked.quality,
             surfaces=reports, max_mean_distance=worst, versions=_versions(),
         )  # fmt: skip
         row = _row(task, "ok", frames=series.n_frames, mean_distance=worst)
@@ -349,7 +367,9 @@ def track_cohort(
         ``"all"`` for the others). Where every frame of a subject has its own plane
         (the valve plane moving with the base) and the method is the projection, the
         planes also anchor the affine fits (:func:`~.surface_tracking.track_surfaces`'s
-        ``base_planes``; the record's ``base_anchors``).
+        ``base_planes``; the record's ``base_anchors``). A subject given none has its
+        planes estimated from its images when ``settings.estimate_planes`` says so (see
+        the module).
     jobs : int, default 2
         Subjects tracked in parallel (joblib processes).
     progress : bool
@@ -378,4 +398,5 @@ def track_cohort(
         order = {t.subject: i for i, t in enumerate(tasks)}
         rows.sort(key=lambda r: order[r["subject"]])
         atomic_write_text(output / REPORT_FILE, _report_csv(rows))
-    return TrackingOutcome(output, rows)
+        planes_file = gather_plane_table(output, [t.subject for t in tasks])
+    return TrackingOutcome(output, rows, planes_file)
