@@ -48,7 +48,8 @@ class TrackingSettings:
         (:func:`~.surface_tracking.combine_weight`): limits the drift of the chain. The
         default since it was measured to lower the error along the long axis at ES on
         8 mm and 1.5 mm label series, with valve planes given, estimated or absent, at
-        about twice the time (generated ``base_planes`` in ``docs/tracking.md``).
+        roughly one and a half times the time (generated ``base_planes`` in
+        ``docs/tracking.md``).
     project_ed : bool
         First move the ED mesh along its normals onto frame 0's surface, extracted like
         every other frame's, so that the motion is measured between surfaces extracted
