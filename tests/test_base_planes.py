@@ -18,12 +18,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ladders.study.cli.track_cli import _read_planes
 from ladders.study.cohort import cycle_fraction, make_synthetic_cohort, motion_forward
 from ladders.study.cohort.analytic_ventricle import AnalyticVentricle
 from ladders.study.imaging import (
     ImageError,
     LabelImage,
+    planes_by_image,
+    read_plane_table,
     render_labels,
     short_axis_affine,
     write_series,
@@ -163,7 +164,7 @@ def test_the_defaults_estimate_the_planes_of_a_thick_sliced_series(tracked):
     estimated = np.array(record["estimated_planes"]["planes"])
     normal = truth[0, 3:]
     assert np.abs(_heights(estimated, normal) - _heights(truth, normal)).max() < TILTED_TOL
-    table = _read_planes(outcome.planes_file)  # the table --cut-planes reads
+    table = planes_by_image(read_plane_table(outcome.planes_file))  # as --cut-planes reads it
     np.testing.assert_allclose([table["av"][str(t)] for t in range(4)], estimated, atol=1e-6)
     # given back as cut planes, they track the same way
     again = track_cohort(meshes, images, out.parent / "again", 1, TrackingSettings(),

@@ -99,7 +99,8 @@ def run_cycle_cohort(args, abnormality) -> int:
                                        args.vertices, args.seed, args.patients)  # fmt: skip
         folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
                                     tagging=_tag_grid(args.tagging),
-                                    landmarks=args.landmarks)  # fmt: skip
+                                    landmarks=args.landmarks,
+                                    progress=not args.no_progress)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
     n_patients = int(cycles.patients.sum())

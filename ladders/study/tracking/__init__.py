@@ -7,7 +7,8 @@
   checked (:func:`find_series`, :func:`open_series`, :class:`SeriesError`);
 - :mod:`.base_planes`: :func:`estimate_base_planes`, the valve plane of every frame from a
   label series and the ED mesh's rim, where none is given (:func:`rim_plane`,
-  :func:`thick_sliced`, :func:`write_plane_table`);
+  :func:`thick_sliced`; the table is written by
+  :func:`~ladders.study.imaging.plane_table.write_plane_table`);
 - :mod:`.cohort_tracking`: :func:`track_cohort`, every subject of a folder of
   corresponded meshes, resumable, with provenance (``symladders track``);
 - :mod:`.cine_settings`: :class:`CineTrackingSettings`;
@@ -20,13 +21,12 @@
 See ``docs/tracking.md`` and ``docs/tracking_cine.md``.
 """
 
+from ..imaging.plane_table import PLANES_FILE
 from .base_planes import (
-    PLANES_FILE,
     BasePlaneEstimate,
     estimate_base_planes,
     rim_plane,
     thick_sliced,
-    write_plane_table,
 )
 from .cine_images import image_from_array, wall_mask
 from .cine_settings import CineTrackingSettings
@@ -43,7 +43,6 @@ __all__ = [
     "estimate_base_planes",
     "rim_plane",
     "thick_sliced",
-    "write_plane_table",
     "CineTrackingSettings",
     "image_from_array",
     "register_frames",

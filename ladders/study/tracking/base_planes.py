@@ -41,8 +41,6 @@ analytic ventricle) is measured in ``benchmarks/bench_base_planes.py`` and repor
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,26 +50,21 @@ from scipy import ndimage
 
 from manifolds.data_terms.mesh_geometry import check_mesh
 
-from ..files import atomic_write_text
 from ..imaging.label_images import ImageError
+from ..imaging.plane_table import PLANES_FILE, write_plane_table
 from ..imaging.surface_extraction import largest_component, voxel_extent
 from ..volume import boundary_vertices
 
 __all__ = [
     "BasePlaneEstimate",
-    "PLANES_FILE",
     "THICK_RATIO",
     "estimate_base_planes",
     "gather_plane_table",
     "planes_wanted",
     "rim_plane",
     "thick_sliced",
-    "write_plane_table",
 ]
 
-#: The table of valve planes: the synthetic cohort's truth, the tracking's estimates;
-#: what ``symladders track --cut-planes`` reads.
-PLANES_FILE = "valve_planes.csv"
 #: A series is thick-sliced when its largest voxel spacing is at least this many times
 #: its smallest (:func:`thick_sliced`).
 THICK_RATIO = 2.0
@@ -113,22 +106,6 @@ def thick_sliced(affine) -> bool:
     """Whether a grid's largest voxel spacing is at least :data:`THICK_RATIO` times its smallest."""
     spacing = np.linalg.norm(np.asarray(affine, dtype=float)[:3, :3], axis=0)
     return bool(spacing.max() >= THICK_RATIO * spacing.min())
-
-
-def write_plane_table(path, planes: dict) -> Path:
-    """Write ``{image: {frame: (x, y, z, nx, ny, nz)}}`` as the CSV table of valve planes.
-
-    The columns ``image,frame,x,y,z,nx,ny,nz`` (one row per frame, world mm), the format
-    ``symladders track --cut-planes`` reads; written atomically.
-    """
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["image", "frame", "x", "y", "z", "nx", "ny", "nz"])
-    for image, frames in planes.items():
-        for frame, plane in frames.items():
-            writer.writerow([image, frame, *(f"{float(x):.6f}" for x in plane)])
-    atomic_write_text(Path(path), buffer.getvalue())
-    return Path(path)
 
 
 def planes_wanted(settings, affine, faces, given) -> bool:
