@@ -178,7 +178,7 @@ def test_project_ed_measures_the_motion_between_surfaces_extracted_alike(subject
 
 
 def test_registration_follows_the_surfaces(subject, surfaces):
-    settings = TrackingSettings(method="registration")
+    settings = TrackingSettings(method="registration", refine_ed=False)
     out = track_surfaces(subject["ed"], subject["faces"], surfaces[:2], settings)
     for t in (1,):
         assert out.quality[t]["mean_distance"] < 0.25 * VOXEL
