@@ -7,6 +7,7 @@ standard error), 2 on a usage error.
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 
@@ -59,8 +60,11 @@ def add_track_parser(sub) -> None:
             "(<subject>.nii.gz with the frames on the fourth axis, or a folder <subject>/ of 3-D "
             "frames numbered frame_00, frame_01, ...; the first is ED). Every frame is meshed as "
             "'symladders mesh' does and the mesh is moved from frame to frame onto it (affine "
-            "fit and normal projection, or an LDDMM registration); with --refine-ed every frame "
-            "is also reached from ED directly and the two results are combined (less drift). "
+            "fit and normal projection, or an LDDMM registration); every frame is also reached "
+            "from ED directly and the two results are combined (less drift; --no-refine-ed: "
+            "the chain alone). On thick slices a subject given no valve plane (--cut-planes) "
+            "has the plane of every frame estimated from its images (--estimate-planes), "
+            "written to OUTPUT/valve_planes.csv. "
             "The ED mesh is first moved along its normals onto ED's surface meshed like the "
             "other frames, so that the motion is measured between surfaces extracted alike. "
             "A cut plane for every frame of a subject (--cut-planes, e.g. the cohort's "
@@ -117,8 +121,9 @@ def add_track_parser(sub) -> None:
     add_output(p, "symladders-output/tracked", "folder of the tracked meshes")
     p.add_argument("--method", choices=("projection", "registration"), default="projection",
                    help="frame to frame: affine fit then normal projection, or LDDMM registration")  # fmt: skip
-    p.add_argument("--refine-ed", action="store_true",
-                   help="also move ED onto every frame directly and combine (limits the drift)")  # fmt: skip
+    p.add_argument("--refine-ed", action=argparse.BooleanOptionalAction, default=True,
+                   help="also move ED onto every frame directly and combine (limits the drift; "
+                        "--no-refine-ed: the chain alone, about half the time)")  # fmt: skip
     p.add_argument("--keep-ed", action="store_true",
                    help="frame 0 is the ED mesh as given, not moved along its normals onto ED's "
                         "surface meshed like the other frames (the difference between the two "
@@ -134,6 +139,12 @@ def add_track_parser(sub) -> None:
                         "axis); more than 'symladders mesh' uses: on thick slices it lowers the "
                         "noise of the tracked motion")  # fmt: skip
     add_cut_planes(p)
+    p.add_argument("--estimate-planes", choices=("auto", "always", "never"), default="auto",
+                   help="a subject without a plane in --cut-planes gets the valve plane of every "
+                        "frame estimated from its images and its ED mesh's rim: auto on thick "
+                        "slices (the largest voxel spacing at least twice the smallest), always, "
+                        "or never; written to OUTPUT/valve_planes.csv, which --cut-planes takes "
+                        "back")  # fmt: skip
     add_batch_arguments(p)
     p.set_defaults(run=run_track_command, output_is_file=False)
 
@@ -173,7 +184,7 @@ def run_track_command(args) -> int:
             meshing = MeshingSettings(n_vertices=args.vertices or None, mask_sigma=args.mask_sigma)
             settings = TrackingSettings(
                 method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
-                project_ed=not args.keep_ed, meshing=meshing,
+                project_ed=not args.keep_ed, meshing=meshing, estimate_planes=args.estimate_planes,
             )  # fmt: skip
         label = 0 if args.label is None else args.label
         with parallel_backend(args, "track"):
@@ -192,6 +203,9 @@ def run_track_command(args) -> int:
         f"{counts['skipped']} already done, {counts['failed']} failed, in {outcome.output} "
         "(tracking.csv)"
     )
+    if outcome.planes_file is not None:
+        print(f"valve planes estimated from the images: {outcome.planes_file} (the --cut-planes "
+              "table: inspect or edit it and pass it back)")  # fmt: skip
     for r in outcome.failed:
         print(f"symladders track: failed: {r['subject']}: {r['error']}", file=sys.stderr)
     return 1 if outcome.failed else 0

@@ -40,7 +40,13 @@ from .label_images import (
     read_label_series,
 )
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
-from .plane_table import check_plane_table, planes_by_image, read_plane_table
+from .plane_table import (
+    PLANES_FILE,
+    check_plane_table,
+    planes_by_image,
+    read_plane_table,
+    write_plane_table,
+)
 from .rv_label import add_rv_label, voxel_centres
 from .septum import label_centroid, label_points, landmarks_from_labels, lv_apex_and_base
 from .series_frames import FRAME_CHOICES, least_volume_frame, read_frames_table
@@ -49,7 +55,9 @@ from .surface_extraction import (
     SurfaceReport,
     cut_at_plane,
     extract_surface,
+    largest_component,
     remove_lid,
+    voxel_extent,
 )
 from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
 
@@ -66,6 +74,8 @@ __all__ = [
     "mesh_label_images",
     "plan_meshing",
     "read_plane_table",
+    "write_plane_table",
+    "PLANES_FILE",
     "check_plane_table",
     "planes_by_image",
     "FRAME_CHOICES",
@@ -79,6 +89,8 @@ __all__ = [
     "EPICARDIUM_FOLDER",
     "epicardial_image",
     "extract_epicardium",
+    "largest_component",
+    "voxel_extent",
     "close_surface",
     "short_axis_affine",
     "voxelize",

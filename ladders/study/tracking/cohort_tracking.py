@@ -14,6 +14,15 @@ planes anchoring the base's height where every frame has its own) and writes::
     <output>/<subject>.json             provenance: inputs' SHA-256, frames, settings,
                                          per-frame quality and meshing, versions
     <output>/tracking.csv               one row per subject: status, frames, reason
+    <output>/valve_planes.csv           the valve planes estimated from the images (the
+                                         ``--cut-planes`` table, world mm), when any was
+
+A subject given no valve plane has every frame's plane estimated from its images and
+its ED mesh's rim (:func:`~.base_planes.estimate_base_planes`) when
+``settings.estimate_planes`` says so (by default on thick slices,
+:func:`~.base_planes.thick_sliced`); the planes are then used as given ones, kept in the
+subject's record (``estimated_planes``) and gathered in ``valve_planes.csv``, which
+``cut_planes`` (``symladders track --cut-planes``) takes back, e.g. after an edit.
 
 With ``myocardium_label`` (label series), every frame's epicardium is meshed too and
 frame 0's is followed through them; with ``epicardia`` (cine series), a folder of ED
@@ -53,6 +62,7 @@ from ..files import atomic_write_text, file_sha256
 from ..imaging.surface_extraction import MeshingSettings, extract_surface
 from ..meshes.mesh_io import read_mesh, write_mesh
 from ..preparation.alignment import SimilarityTransform
+from .base_planes import estimate_base_planes, gather_plane_table, planes_wanted
 from .cine_tracking import CineTrackingSettings, track_cine
 from .epicardium_tracking import EPICARDIUM_FOLDER, track_cine_with_epicardium, track_epicardium
 from .label_series import SeriesError, check_field_of_view, open_series
@@ -76,10 +86,13 @@ class TrackingOutcome:
     records : list of dict
         ``subject``, ``status`` (ok, skipped, failed), ``frames``, ``mean_distance``
         (largest over the frames, mm), ``error``.
+    planes_file : Path or None
+        ``valve_planes.csv``, the planes estimated from the images, when any was.
     """
 
     output: Path
     records: list = field(default_factory=list)
+    planes_file: Path | None = None
 
     @property
     def failed(self) -> list:
@@ -220,7 +233,12 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
                 epicardium = TrackedSurfaces(epi, epi_faces)
             tracked = TrackedSurfaces(moved, faces)
         else:
-            surfaces, frames = [], series.frames()
+            frames = series.frames()
+            if planes_wanted(settings, series.affine, faces, planes):
+                estimate = estimate_base_planes(scanner, faces, frames, label)
+                record["estimated_planes"] = estimate.as_dict()
+                planes = {str(t): [float(x) for x in p] for t, p in enumerate(estimate.planes)}
+            surfaces = []
             meshing = [_frame_settings(settings.meshing, planes, t) for t in range(len(frames))]
             for image, frame_meshing in zip(frames, meshing):
                 v, f, report = extract_surface(image, label, frame_meshing)
@@ -258,7 +276,8 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
             n_frames=series.n_frames, label=int(label), frame="atlas" if transform else "images",
             affine=series.affine.tolist(), spacing_mm=np.linalg.norm(series.affine[:3, :3], axis=0).tolist(),
             scale=1.0 if transform is None else float(transform.scale),
-            settings=settings.as_dict(), cut_planes=planes, quality=tracked.quality,
+            settings=settings.as_dict(), cut_planes=record["fingerprint"]["cut_planes"],
+            quality=tracked.quality,
             surfaces=reports, max_mean_distance=worst, versions=_versions(),
         )  # fmt: skip
         row = _row(task, "ok", frames=series.n_frames, mean_distance=worst)
@@ -328,7 +347,9 @@ def track_cohort(
         ``"all"`` for the others). Where every frame of a subject has its own plane
         (the valve plane moving with the base) and the method is the projection, the
         planes also anchor the affine fits (:func:`~.surface_tracking.track_surfaces`'s
-        ``base_planes``; the record's ``base_anchors``).
+        ``base_planes``; the record's ``base_anchors``). A subject given none has its
+        planes estimated from its images when ``settings.estimate_planes`` says so (see
+        the module).
     jobs : int, default 2
         Subjects tracked in parallel (joblib processes).
     progress : bool
@@ -375,4 +396,5 @@ def track_cohort(
         order = {t.subject: i for i, t in enumerate(tasks)}
         rows.sort(key=lambda r: order[r["subject"]])
         atomic_write_text(output / REPORT_FILE, _report_csv(rows))
-    return TrackingOutcome(output, rows)
+        planes_file = gather_plane_table(output, [t.subject for t in tasks])
+    return TrackingOutcome(output, rows, planes_file)
