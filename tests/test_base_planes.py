@@ -139,18 +139,21 @@ def test_thick_slices_and_bad_input():
 @pytest.fixture(scope="module")
 def tracked(tmp_path_factory):
     """The analytic ventricle's first frames as a thick-sliced and an isotropic series,
-    tracked with the defaults."""
+    tracked with the defaults (and the isotropic one with the rule ``auto``)."""
     root = tmp_path_factory.mktemp("planes")
     av = AnalyticVentricle()
     times = [0.0, 0.1, 0.2, 0.3]
     out = {}
-    for name, thickness in (("thick", SLICE), ("iso", PIXEL)):
+    for name, thickness, rule in (("thick", SLICE, "always"), ("iso", PIXEL, "always"),
+                                  ("iso_auto", PIXEL, "auto")):  # fmt: skip
         v, f, frames, truth, affine = _series(av, times, thickness=thickness)
         meshes, images = root / name / "meshes", root / name / "images"
         meshes.mkdir(parents=True)
         write_mesh(meshes / "av_ed.vtk", v, f)
         write_series(images / "av.nii.gz", [x.labels for x in frames], affine)
-        outcome = track_cohort(meshes, images, root / name / "out", 1, TrackingSettings(),
+        settings = TrackingSettings(estimate_planes=rule)
+        assert (rule == "always") == (settings == TrackingSettings())  # the default
+        outcome = track_cohort(meshes, images, root / name / "out", 1, settings,
                                jobs=1, progress=False)  # fmt: skip
         out[name] = (meshes, images, root / name / "out", outcome, truth)
     return out
@@ -176,8 +179,17 @@ def test_the_defaults_estimate_the_planes_of_a_thick_sliced_series(tracked):
         np.testing.assert_allclose(first, second, atol=1e-4)
 
 
-def test_an_isotropic_series_is_tracked_without_estimated_planes(tracked):
-    _, _, out, outcome, _ = tracked["iso"]
+def test_the_defaults_estimate_the_planes_of_an_isotropic_series_too(tracked):
+    _, _, out, outcome, truth = tracked["iso"]
+    assert outcome.failed == [] and outcome.planes_file == out / PLANES_FILE
+    record = json.loads((out / "av.json").read_text())
+    estimated = np.array(record["estimated_planes"]["planes"])
+    normal = truth[0, 3:]
+    assert np.abs(_heights(estimated, normal) - _heights(truth, normal)).max() < TILTED_TOL
+
+
+def test_the_rule_auto_leaves_an_isotropic_series_without_estimated_planes(tracked):
+    _, _, out, outcome, _ = tracked["iso_auto"]
     assert outcome.failed == [] and outcome.planes_file is None
     assert not (out / PLANES_FILE).exists()
     record = json.loads((out / "av.json").read_text())

@@ -139,11 +139,11 @@ def add_track_parser(sub) -> None:
                         "axis); more than 'symladders mesh' uses: on thick slices it lowers the "
                         "noise of the tracked motion")  # fmt: skip
     add_cut_planes(p)
-    p.add_argument("--estimate-planes", choices=("auto", "always", "never"), default="auto",
+    p.add_argument("--estimate-planes", choices=("auto", "always", "never"), default="always",
                    help="a subject without a plane in --cut-planes gets the valve plane of every "
-                        "frame estimated from its images and its ED mesh's rim: auto on thick "
-                        "slices (the largest voxel spacing at least twice the smallest), always, "
-                        "or never; written to OUTPUT/valve_planes.csv, which --cut-planes takes "
+                        "frame estimated from its images and its ED mesh's rim: always, auto on "
+                        "thick slices only (the largest voxel spacing at least twice the "
+                        "smallest), or never; written to OUTPUT/valve_planes.csv, which --cut-planes takes "
                         "back")  # fmt: skip
     add_batch_arguments(p)
     p.set_defaults(run=run_track_command, output_is_file=False)

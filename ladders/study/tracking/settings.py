@@ -81,8 +81,10 @@ class TrackingSettings:
     estimate_planes : {"auto", "always", "never"}
         Whether :func:`~.cohort_tracking.track_cohort` estimates the valve plane of every
         frame from the images (:func:`~.base_planes.estimate_base_planes`) for a subject
-        given no plane: ``"auto"`` on thick slices (:func:`~.base_planes.thick_sliced`:
-        the largest voxel spacing at least twice the smallest), ``"always"``, ``"never"``.
+        given no plane: ``"always"`` (the default: the estimate lowers the error along
+        the long axis on isotropic series as on thick slices, docs/tracking.md),
+        ``"auto"`` on thick slices only (:func:`~.base_planes.thick_sliced`: the largest
+        voxel spacing at least twice the smallest), ``"never"``.
         The planes then cut the frames' surfaces and anchor the affine fits as given
         planes do.
     meshing : MeshingSettings
@@ -103,7 +105,7 @@ class TrackingSettings:
     normal_max_distance: float | None = None
     max_detour: float | None = 2.0
     correspondence: CorrespondenceSettings = field(default_factory=_default_correspondence)
-    estimate_planes: str = "auto"
+    estimate_planes: str = "always"
     meshing: MeshingSettings = field(default_factory=lambda: MeshingSettings(mask_sigma=1.5))
 
     def __post_init__(self):
