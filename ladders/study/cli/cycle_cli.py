@@ -11,6 +11,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..sequences.cycle_analysis import MEASURES, MOTION_MEASURES
 from .cli_types import (
     DefaultsFormatter,
     UsageError,
@@ -68,7 +69,9 @@ def add_cycle_parsers(sub) -> None:
         description=(
             "Test two groups' transported cycles (STUDY, the output of 'symladders "
             "cycle-study') on the normal motion (or, with --measure rotation, the rotation "
-            "about the long axis) at every vertex: per frame (FWER over the "
+            "about the long axis), or their wall maps (STUDY, the output of 'symladders "
+            "wall', with --measure thickness, thickening, radial, circumferential or "
+            "longitudinal) at every vertex: per frame (FWER over the "
             "vertices and frames together), and on each vertex's peak and its "
             "time in the cycle (FWER over the vertices), by permutation. OUTPUT holds "
             "cycle_vertices.csv, cycle_frames.csv, cycle_tests.vtu and cycle_curves.png."
@@ -85,10 +88,12 @@ def add_cycle_parsers(sub) -> None:
     q.add_argument("--tfce", action="store_true",
                    help="also test the peak with threshold-free cluster enhancement on the "
                         "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
-    q.add_argument("--measure", choices=("normal", "rotation"), default="normal",
+    q.add_argument("--measure", choices=tuple(MEASURES), default="normal",
                    help="the curve tested per vertex: the normal motion (mm), or the rotation "
                         "about the long axis (degrees, counter-clockwise seen from the apex; "
-                        "what a twist changes; needs --aha)")  # fmt: skip
+                        "what a twist changes; needs --aha), of a cycle study; or, of the maps "
+                        "of 'symladders wall', the wall thickness or thickening (mm) or the "
+                        "radial, circumferential or longitudinal strain (percent)")  # fmt: skip
     q.add_argument("--min-radius", type=positive_float, default=5.0,
                    help="with --measure rotation: vertices closer to the long axis than this "
                         "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
@@ -199,12 +204,15 @@ def run_cycle_analyze_command(args) -> int:
     from ..sequences import compare_cycles, load_cycle_motion
     from ..sequences.cycle_outputs import write_cycle_tests
 
-    motion = load_cycle_motion(args.study)
+    if args.measure in MOTION_MEASURES:
+        motion = load_cycle_motion(args.study)
+    else:  # the wall's measures: the maps of 'symladders wall'
+        from ..wall import load_wall_cycles
+
+        motion = load_wall_cycles(args.study)
     labels, names = _two_groups(read_groups(args.groups), args.compare, motion.subjects)
     if len(labels) < len(motion.subjects):  # subjects of other groups left out
-        keep = [i for i, s in enumerate(motion.subjects) if s in labels]
-        motion = type(motion)(tuple(motion.subjects[i] for i in keep),
-                              motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
+        motion = motion.subset([s for s in motion.subjects if s in labels])
     axis = _landmarks(args)
     tested = _tested_segments(args, motion, axis)
     try:

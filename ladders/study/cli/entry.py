@@ -4,7 +4,8 @@ Subcommands: ``study``, ``mesh`` (label images to meshes), ``correspond`` and ``
 a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
 groups with a planted abnormality), ``analyze`` (group statistics of a study's
 transported motion), ``validate``, ``track`` (corresponded ED meshes through label or cine
-series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested).
+series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested),
+``wall`` (wall thickness, thickening and strain of tracked subjects).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
+from .wall_cli import add_wall_parser
 
 __all__ = ["main", "build_parser"]
 
@@ -56,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_validate_parser(sub)
     add_track_parser(sub)
     add_cycle_parsers(sub)
+    add_wall_parser(sub)
     return parser
 
 
