@@ -11,6 +11,9 @@ folder of files of the same names). :func:`write_route_inputs` writes, in
 * ``series/``: the series of the subjects tracked through the cycle, read by
   ``symladders track`` (a link; a copy turned so that it starts at end-diastole when
   the table's ED frame is not frame 0);
+* ``tracked_meshes/``: links to those subjects' corresponded ED meshes and
+  correspondence records (written by the step ``correspond``), so that ``symladders
+  track`` follows them alone;
 * ``frames.csv``: the ED and ES frames the table gives (``subject,ed,es``);
 * ``landmarks.csv``: the landmarks the table gives;
 * ``planes.csv``: the valve planes of the settings, per image and frame, in the table
@@ -50,6 +53,7 @@ class RouteInputs:
         self.folder = Path(output) / "inputs"
         self.images = self.folder / "images"
         self.series = self.folder / "series"
+        self.tracked_meshes = self.folder / "tracked_meshes"
         self.frames = self.folder / "frames.csv"
         self.landmarks = self.folder / "landmarks.csv"
         self.planes = self.folder / "planes.csv"
@@ -174,6 +178,26 @@ def series_frames(entry, label: int | None) -> tuple[int, int]:
     return (0 if ed is None else ed), es
 
 
+def _tracked_meshes(inputs: RouteInputs, corresponded: Path, entries) -> None:
+    """Links to the tracked subjects' corresponded ED meshes and records (they may not exist
+    yet: the step ``correspond`` writes them before ``track`` reads the links)."""
+    wanted = {}
+    for e in entries:
+        wanted[f"{e.subject}_ed.vtk"] = corresponded / f"{e.subject}_ed.vtk"
+        wanted[f"correspondence/{e.subject}.json"] = (
+            corresponded / "correspondence" / f"{e.subject}.json"
+        )
+    for name, target in wanted.items():
+        _link(inputs.tracked_meshes / name, target)
+    if inputs.tracked_meshes.is_dir():
+        for path in sorted(inputs.tracked_meshes.rglob("*")):
+            if (
+                path.is_symlink()
+                and path.relative_to(inputs.tracked_meshes).as_posix() not in wanted
+            ):
+                path.unlink()
+
+
 def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool) -> RouteInputs:
     """Write the inputs folder of ``table`` (see the module); the paths written.
 
@@ -203,6 +227,7 @@ def write_route_inputs(table: SubjectsTable, output: Path, settings, track: bool
         for path in sorted(inputs.series.iterdir()):
             if path.name not in tracked and not path.name.endswith(".source"):
                 path.unlink()
+    _tracked_meshes(inputs, Path(output) / "corresponded", table.tracked if track else [])
     label = settings["images"]["label"]
     frames = [(e.subject, *series_frames(e, label)) for e in table.entries
               if e.series is not None and (e.ed_frame is not None or e.es_frame is not None)]  # fmt: skip

@@ -142,9 +142,10 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
     tracked = out / "tracked"
     track = settings["tracking"]["track"] and bool(table.tracked)
     if track:
-        argv = [corresponded, inputs.series, "--label", str(images["label"]), "-o", tracked,
-                *batch]  # fmt: skip
-        steps.append(Step("track", "track", argv, [corresponded, inputs.series], [tracked], [],
+        argv = [inputs.tracked_meshes, inputs.series, "--label", str(images["label"]), "-o",
+                tracked, *batch]  # fmt: skip
+        steps.append(Step("track", "track", argv, [inputs.tracked_meshes, inputs.series],
+                          [tracked], [],
                           f"{len(table.tracked)} subject(s) followed through their series"))  # fmt: skip
     study = out / "study"
     model_argv = ["--deformation", settings["transport"]["deformation"]]

@@ -96,7 +96,15 @@ SETTINGS: dict[str, dict[str, _Key]] = {
             "the regularisation alpha^2 of the registrations (eq. 3); large for group statistics",
         ),  # fmt: skip
         "deformation": _Key(
-            "str", "lddmm", "the deformation model (symladders study --deformation)"
+            "str",
+            "lddmm",
+            "the deformation model: a registered name (symladders study --deformation)",
+        ),  # fmt: skip
+        "plugins": _Key(
+            "plugins",
+            [],
+            "modules or .py files that register deformation models of your own "
+            "(symladders study --plugin)",
         ),  # fmt: skip
     },
     "tracking": {
