@@ -32,6 +32,7 @@ from .correspond_cli import add_correspond_parser
 from .cycle_cli import add_cycle_parsers
 from .mesh_cli import add_mesh_parser
 from .plugin_arguments import preload_plugins
+from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
@@ -47,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    add_run_parser(sub)
     add_study_parser(sub)
     add_mesh_parser(sub)
     add_correspond_parser(sub)

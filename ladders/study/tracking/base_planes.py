@@ -109,13 +109,14 @@ def thick_sliced(affine) -> bool:
 
 
 def planes_wanted(settings, affine, faces, given) -> bool:
-    """Whether a subject's valve planes are estimated from its images: none ``given``, and
-    ``settings.estimate_planes`` "always", or "auto" on a thick-sliced grid (``affine``)
-    with an open ED mesh (``faces``)."""
+    """Whether a subject's valve planes are estimated from its images: none ``given``, an
+    open ED mesh (``faces``: the estimate starts from its rim; a closed one, whose label
+    was meshed without a valve plane, has none), and ``settings.estimate_planes``
+    "always", or "auto" on a thick-sliced grid (``affine``)."""
     mode = getattr(settings, "estimate_planes", "never")
-    if given or mode == "never":
+    if given or mode == "never" or len(boundary_vertices(faces)) == 0:
         return False
-    return mode == "always" or (thick_sliced(affine) and len(boundary_vertices(faces)) > 0)
+    return mode == "always" or thick_sliced(affine)
 
 
 def gather_plane_table(output, subjects) -> Path | None:

@@ -238,6 +238,10 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
                 estimate = estimate_base_planes(scanner, faces, frames, label)
                 record["estimated_planes"] = estimate.as_dict()
                 planes = {str(t): [float(x) for x in p] for t, p in enumerate(estimate.planes)}
+            elif not planes and getattr(settings, "estimate_planes", "never") != "never":
+                record["estimated_planes"] = {"skipped": "the ED mesh is closed (its label was "
+                                              "meshed without a valve plane): the estimate "
+                                              "starts from an open mesh's rim"}  # fmt: skip
             surfaces = []
             meshing = [_frame_settings(settings.meshing, planes, t) for t in range(len(frames))]
             for image, frame_meshing in zip(frames, meshing):
