@@ -56,7 +56,7 @@ def _cohort(folder: Path, n: int, n_series: int, n_frames: int, seed: int) -> Pa
     write_image_cohort(cycles, folder, n_series=n_series)
     settings = folder / "study.toml"
     text = settings.read_text(encoding="utf-8")
-    settings.write_text(text + "\n[execution]\nbackend = \"dask\"\n", encoding="utf-8")
+    settings.write_text(text + '\n[execution]\nbackend = "dask"\n', encoding="utf-8")
     return settings
 
 
@@ -110,7 +110,7 @@ def main(argv=None) -> None:
     lines = [
         f"{args.subjects} subjects of the whole-cycle cohort as short-axis label stacks (1.5 x "
         f"1.5 x 8 mm, RV label), {args.series} of them as {args.frames}-frame series; "
-        f"`symladders run study.toml` with `backend = \"dask\"` on a LocalCluster of "
+        f'`symladders run study.toml` with `backend = "dask"` on a LocalCluster of '
         f"{args.workers} single-threaded workers ({machine()}). Peak memory: the largest "
         "resident set of a worker during the step (workers restarted before each step), and "
         "of the route's own process.",

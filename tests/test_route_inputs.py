@@ -106,7 +106,9 @@ def test_a_table_refuses_what_it_cannot_use(images, header, row, line, column, w
 def test_a_duplicate_subject_names_both_lines(images):
     path = _table(images, ["subject", "image"], [["s1", "b.nii.gz"], ["s2", "c.nii.gz"],
                                                  ["s1", "c.nii.gz"]])  # fmt: skip
-    with pytest.raises(SubjectsTableError, match=r"line 4, column 'subject': .* \(the first is line 2\)"):
+    with pytest.raises(
+        SubjectsTableError, match=r"line 4, column 'subject': .* \(the first is line 2\)"
+    ):
         read_subjects_table(path)
 
 
@@ -120,7 +122,9 @@ def test_incomplete_landmarks_and_a_landmark_that_is_not_a_number(images):
     assert table.entries[1].landmarks is None and table.has_landmarks
     bad = good[:4] + ["x"] + good[5:]
     path = _table(images, ["subject", "image", *columns], [["s1", "b.nii.gz", *bad]])
-    with pytest.raises(SubjectsTableError, match=r"line 2, column 'base_y': expected a finite number"):
+    with pytest.raises(
+        SubjectsTableError, match=r"line 2, column 'base_y': expected a finite number"
+    ):
         read_subjects_table(path)
 
 
@@ -212,7 +216,9 @@ def test_a_column_the_model_would_ignore_is_refused(images):
         _model(images, header, rows, '[model]\nformula = "group"\nignore = ["notes"]\n')
     m = _model(images, header, rows, '[model]\nformula = "group"\nignore = ["notes", "bmi"]\n')
     assert m.formula == "group"
-    with pytest.raises(RouteSettingsError, match=r"model.formula: column 'weight' is not a covariate"):
+    with pytest.raises(
+        RouteSettingsError, match=r"model.formula: column 'weight' is not a covariate"
+    ):
         _model(images, header, rows, '[model]\nformula = "group + weight"\nignore = ["notes"]\n')
     with pytest.raises(SubjectsTableError, match=r"column 'nothing': listed under 'ignore'"):
         _model(images, header, rows, '[model]\nignore = ["nothing"]\n')

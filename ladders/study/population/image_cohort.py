@@ -164,8 +164,9 @@ def write_image_cohort(data, folder, *, spacing: float = 1.5, thickness: float |
             files = _cycle_images(folder, cycles, i, series, spacing, thickness)
         else:
             series = False
-            files = _pair(folder, subject.name, subject.ed, subject.es, cohort.faces, spacing,
-                          thickness)
+            files = _pair(
+                folder, subject.name, subject.ed, subject.es, cohort.faces, spacing, thickness
+            )
         image, ed, es = (files[0], "", "") if series else ("", *files)
         j = table["subject"].index(subject.name)
         rows.append([subject.name, image, ed, es, *(table[c][j] for c in covariates)])

@@ -35,8 +35,8 @@ from ..recommendations import main_motion
 from .aha_model import AHA_NAMES, aha_segments
 from .analysis import select_motions
 from .group_comparison import normalize_motion
-from .model_figures import plot_model_map
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model
+from .model_figures import plot_model_map
 from .transported_motion import load_transported_motion
 
 __all__ = ["ModelOutcome", "check_design_table", "analyze_model", "main_comparison"]

@@ -92,7 +92,7 @@ SETTINGS: dict[str, dict[str, _Key]] = {
     "transport": {
         "alpha2": _Key(
             "float",
-            100.0,
+            RECOMMENDED_ALPHA2,
             "the regularisation alpha^2 of the registrations (eq. 3); large for group statistics",
         ),  # fmt: skip
         "deformation": _Key(
