@@ -1,4 +1,4 @@
-"""Which of the paper's claims hold under which study settings (``docs/developer_notes.md``).
+"""Which of the paper's claims hold under which study settings (``docs/evidence/developer_notes.md``).
 
 Runs the study on the first subjects of the built-in cohort for each setting
 (control points x sigma x mesh resolution, with the study's stopping rule) and

@@ -1,4 +1,4 @@
-"""The figures of docs/study_results.md, read from the folders `symladders study` wrote.
+"""The figures of docs/evidence/study_results.md, read from the folders `symladders study` wrote.
 
     symladders study --deformation both --output DEFAULT        # 20 subjects, LDDMM and SVF
     symladders study --full --output FULL                       # 138 subjects

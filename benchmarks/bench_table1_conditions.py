@@ -23,7 +23,7 @@ study on the first 10 subjects of the default cohort at ``alpha^2`` in 0.01, 0.1
 * ``early_stop``: one half of the paper's practice, its stopping (relative decrease
   1e-4 or 100 iterations) with the default control points. The other half, the
   optimised grid run to convergence, costs about an hour at this size; it was measured
-  on smaller meshes by ``bench_sensitivity.py`` (``docs/developer_notes.md``).
+  on smaller meshes by ``bench_sensitivity.py`` (``docs/evidence/developer_notes.md``).
 
 Printed and written to ``docs/generated/table1_conditions.md``: Table 1's cells per
 condition beside the paper's, and which of the paper's trends appear.

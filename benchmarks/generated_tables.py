@@ -3,7 +3,8 @@
 A benchmark calls :func:`publish` with a name and a Markdown table. The table is
 written, under a heading naming the CPU model, the core count, the SIMD level and
 the date (:func:`machine`), to ``docs/generated/<name>.md``, and copied into every
-README or docs page between the markers::
+page of the README, the user guide (``docs/*.md``) or the evidence
+(``docs/evidence/*.md``) between the markers::
 
     <!-- BEGIN generated/<name> -->
     ...
@@ -39,10 +40,16 @@ __all__ = [
     "read_table",
     "refresh",
     "PAGES",
+    "GUIDE_PAGES",
+    "EVIDENCE_PAGES",
 ]
 
+#: The user guide: the README and the pages of ``docs/`` (what to do, what a result means).
+GUIDE_PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+#: The evidence: the validation and benchmark reports of ``docs/evidence/`` the guide links to.
+EVIDENCE_PAGES = sorted((ROOT / "docs" / "evidence").glob("*.md"))
 #: The pages whose marked regions are kept equal to the generated tables.
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [*GUIDE_PAGES, *EVIDENCE_PAGES]
 
 
 def simd_level() -> str:

@@ -84,7 +84,7 @@ def transvectivity_error(space, template, shape, other, distance: Distance = "rm
     """Transvectivity ``d(s_T o s_M(S'), s_M o s_S(S'))`` with ``M`` the midpoint from ``T``.
 
     Zero in an affine symmetric space (eq. 8); otherwise its leading term is a
-    covariant derivative of the curvature, ``nabla R`` (see ``docs/validation.md``).
+    covariant derivative of the curvature, ``nabla R`` (see ``docs/evidence/validation.md``).
     """
     d = _distance(space, distance)
     _points(space, template=template, shape=shape, other=other)
@@ -133,7 +133,7 @@ def symmetry_errors(
         ``-Log_M(S')`` (:meth:`manifolds.Connection.symmetry_near`) instead of the
         space's cold start. Exact where ``log`` is (closed forms: no effect); for an
         iterative ``log`` it saves iterations, and the result is the minimiser the
-        solver reaches from that start (``docs/developer_notes.md`` measures when the cold
+        solver reaches from that start (``docs/evidence/developer_notes.md`` measures when the cold
         and warm errors agree).
 
     Returns

@@ -11,7 +11,7 @@ nabla_[X,Y] Z``)::
 
 The second line follows from the first applied to ``-u`` (``s_M o s_S`` is the
 pole ladder of ``-u_S``); the paper prints ``5u + v`` there, a slip that the
-measurements on the warped surface rule out (``docs/validation.md``).
+measurements on the warped surface rule out (``docs/evidence/validation.md``).
 """
 
 from __future__ import annotations

@@ -1,12 +1,12 @@
 """The paper's claim (c) on a small cohort: residuals lower the transvectivity.
 
-The rule is that of docs/study_results.md (``benchmarks/bench_study_results.py``): at one
+The rule is that of docs/evidence/study_results.md (``benchmarks/bench_study_results.py``): at one
 ``alpha^2`` the claim holds when the median paired difference (with residuals minus
 without, per subject) is below 0 and the study's Wilcoxon signed-rank p is below 0.05.
 The paired statistics are the study's own (:func:`ladders.study.reporting.paired_statistics`).
 
 Where it holds on the 20-subject default study is in the claims table of
-docs/study_results.md. This cohort, 10 subjects of the
+docs/evidence/study_results.md. This cohort, 10 subjects of the
 built-in cohort on 97-vertex meshes with the study's default settings (the fixture of
 ``tests/test_study.py::test_claim_a_holds_at_every_alpha_with_control_points_at_the_vertices``
 with more subjects, so that an exact Wilcoxon test can reach 0.05: 10 pairs give

@@ -3,7 +3,7 @@
 The warped surface ``g = dx^2 + (1 + x^2)^2 dy^2`` has ``nabla R != 0``: the pole
 ladder is third order per rung (error ~ n^-2 after n rungs), Schild's ladder
 second order, and the transvectivity error is of order four, with leading term
-given by ``nabla R`` (paper, Section 2.4; see docs/validation.md). The hyperbolic
+given by ``nabla R`` (paper, Section 2.4; see docs/evidence/validation.md). The hyperbolic
 plane written as ``f = cosh`` is the symmetric control case.
 """
 

@@ -1,6 +1,6 @@
 """Every ``symladders ...`` command written in the docs parses with the real parser.
 
-Found in README.md, docs/*.md and examples/: the lines of code blocks (fenced, except
+Found in README.md, docs/*.md, docs/evidence/*.md and examples/: the lines of code blocks (fenced, except
 Python, and indented; continued lines joined; shell comments, pipes and ``&&`` handled)
 and the inline code spans of prose and tables. Nothing runs: each line is parsed by
 :func:`ladders.study.cli.entry.build_parser`, and an unknown command or flag, a wrong value
@@ -24,17 +24,16 @@ real values:
 import argparse
 import re
 import shlex
-from pathlib import Path
 
 import pytest
 
 from ladders.study.cli.cli_types import UsageError
 from ladders.study.cli.entry import build_parser
+from tests.docs_pages import PAGES as DOC_PAGES
+from tests.docs_pages import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted(p.relative_to(ROOT).as_posix()
-               for p in [ROOT / "README.md", *ROOT.glob("docs/*.md"), *ROOT.glob("examples/*")]
-               if p.is_file())  # fmt: skip
+               for p in [*DOC_PAGES, *ROOT.glob("examples/*")] if p.is_file())  # fmt: skip
 
 #: Commands the docs show failing on purpose (a mistyped command and its answer).
 SHOWN_WRONG = {"symladders stduy"}

@@ -5,7 +5,8 @@ C-index value, a speed ratio, an outcome percentage) comes from a benchmark's
 generated region (``<!-- BEGIN generated/<name> -->`` ... ``<!-- END ... -->``,
 copied from ``docs/generated/<name>.md`` by ``benchmarks/generated_tables.py``).
 
-The rule, per page (``README.md`` and ``docs/*.md``, not ``docs/generated/``):
+The rule, per page (``README.md``, ``docs/*.md`` and ``docs/evidence/*.md``, not
+``docs/generated/``):
 
 * Skipped: generated regions and fenced code blocks (a line starting with three
   backticks opens or closes one); inline code spans (`` `...` ``: commands, options,
@@ -33,9 +34,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.docs_pages import PAGES, ROOT
+
 ALLOWED_FILE = Path(__file__).with_name("docs_numbers_allowed.txt")
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 KINDS = ("setting", "target", "definition")
 
 REGION = re.compile(r"<!-- BEGIN generated/(\S+) -->.*?<!-- END generated/\1 -->", re.S)

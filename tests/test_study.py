@@ -256,7 +256,7 @@ def test_claim_a_holds_at_every_alpha_with_control_points_at_the_vertices(tmp_pa
     every vertex) the registration is well posed, and residuals lower the midpoint
     distance, centrality and involutivity at every alpha^2 of the paper's sweep, for
     the mean over the subjects and for most subjects (the paper's claim (a);
-    docs/study_results.md)."""
+    docs/evidence/study_results.md)."""
     from ladders.study.cli.study_arguments import FULL_ALPHA2
 
     cohort = make_synthetic_cohort(n_subjects=3, grid=grid, seed=0)

@@ -6,7 +6,7 @@ from manifolds.lddmm import RegistrationSettings
 
 __all__ = ["DEFAULT_REGISTRATION"]
 
-#: Registration settings of the default study (``docs/developer_notes.md``, "Settings chosen by
+#: Registration settings of the default study (``docs/evidence/developer_notes.md``, "Settings chosen by
 #: measurement"): a kernel of width ``sigma = 10`` mm on control points at the shapes'
 #: vertices, a farthest-point sample of the atlas at a spacing of ``0.7 sigma`` (143
 #: points on the built-in atlas) used on every shape

@@ -59,7 +59,7 @@ __all__ = [
 
 POLICIES = ("dense", "grid", "finegrid", "vertices", "auto")
 #: Default spacing of the ``"vertices"`` policy, in units of ``sigma`` (chosen by
-#: measurement on the study's cohort, ``docs/developer_notes.md``).
+#: measurement on the study's cohort, ``docs/evidence/developer_notes.md``).
 VERTEX_SPACING = 0.7
 AUTO_THRESHOLD = 1000
 MAX_CONTROL_POINTS = 20_000

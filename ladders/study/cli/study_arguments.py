@@ -205,7 +205,7 @@ def _add_model_arguments(p) -> None:
     p.add_argument(
         "--warm-starts",
         action="store_true",
-        help="start Log_M(s_M(S')) from -Log_M(S') (docs/developer_notes.md, 'Warm starts')",
+        help="start Log_M(s_M(S')) from -Log_M(S') (docs/evidence/developer_notes.md, 'Warm starts')",
     )
     p.add_argument(
         "--fanning-steps", type=positive_int, default=10, help="steps of the fanning scheme"
