@@ -219,7 +219,7 @@ def _add_model_arguments(p) -> None:
         "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "
         "comma-separated (each run into OUTPUT/NAME, compared with the first in "
         "OUTPUT/comparison.md); 'both' is lddmm,svf. A model of your own: --plugin "
-        "(docs/add_your_own_space.md)",
+        "(docs/deformation_models.md)",
     )
     p.add_argument(
         "--kernel-backend",

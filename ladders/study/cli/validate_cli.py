@@ -32,7 +32,7 @@ def add_validate_parser(sub) -> None:
         metavar="NAME",
         help="validate this registered deformation model instead (the interface, the "
         "contract of every space and the pole ladder's convergence; "
-        "docs/add_your_own_space.md), written to OUTPUT/deformation_NAME.md",
+        "docs/deformation_models.md), written to OUTPUT/deformation_NAME.md",
     )
     add_plugin_argument(p)
     p.set_defaults(run=run_validate_command)
