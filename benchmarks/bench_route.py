@@ -24,8 +24,8 @@ recommended settings, as written.
   (``analyze_model``, the function ``symladders analyze --design`` runs).
 * **The rerun**: the same command again; every step is reused.
 
-The tables go to ``docs/generated/route_cohort.md`` and the marked region of
-``docs/tutorial_own_data.md``.
+The tables go to ``docs/generated/route_cohort.md`` and, once marked there, the region
+``generated/route_cohort`` of ``docs/evidence/route_evidence.md``.
 """
 
 from __future__ import annotations

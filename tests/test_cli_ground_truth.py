@@ -11,6 +11,8 @@ segmentations. Checked against the cohort they came from with the tolerances of
 """
 
 import json
+import re
+from pathlib import Path
 
 import pytest
 
@@ -133,3 +135,14 @@ def test_the_atlas_with_the_landmark_table_carries_its_landmarks(session):
     status, out, err = run_cli(*argv)
     assert status == 2 and "unknown subject 'case99'" in err, err
     assert f"line {len(table) + 2}, column 'subject'" in err, err  # the line named
+
+
+def test_the_tutorial_names_what_correspond_wrote(session):
+    """Every file of the correspondence's folder docs/tutorial_segmentations.md names (as
+    ``corresponded/...``), the command wrote (the session writes it to ``out``)."""
+    root = session[0]
+    text = (Path(__file__).resolve().parents[1] / "docs" / "tutorial_segmentations.md").read_text()
+    named = set(re.findall(r"`corresponded/([\w<>/.-]+\.(?:md|csv|json|vtk))`", text))
+    assert {"quality.md", "quality.csv", "correspondence/<name>.json"} <= named, named
+    missing = [n for n in named if not list((root / "out").glob(re.sub(r"<\w+>", "*", n)))]
+    assert not missing, f"named in tutorial_segmentations.md but not written: {missing}"

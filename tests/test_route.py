@@ -12,7 +12,9 @@ changed covariate reruns the analysis alone.
 
 import csv
 import json
+import re
 import shlex
+from pathlib import Path
 
 import nibabel as nib
 import numpy as np
@@ -20,6 +22,12 @@ import pytest
 
 from ladders.study.cli import build_parser
 from tests.cli_runner import run_cli
+
+TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial_own_data.md"
+#: Folders of the tutorial's tree that this cohort does not make, and why.
+NOT_MADE_HERE = {
+    "cycle_analysis/": "three subjects or more of two groups with a series; one has a series here"
+}
 
 N_PER_GROUP = 4
 #: The cohort's settings with options that make it quick (smaller meshes, one atlas
@@ -161,3 +169,35 @@ def test_a_changed_covariate_reruns_the_analysis_alone(route, tmp_path):
     assert ran == ["analysis", "report"], out
     record = json.loads((folder / "study_results" / "run.json").read_text(encoding="utf-8"))
     assert record["steps"]["mesh"]["status"] == "partial"
+
+
+def tree_of_the_tutorial(text: str) -> list[str]:
+    """The paths the tutorial's "What each step wrote" tree names, relative to the results
+    folder, as glob patterns (``<subject>``, ``<step>``, ``<kk>``: any name)."""
+    block = re.search(r"## 4\. What each step wrote\n\n```\n(.*?)```", text, re.S).group(1)
+    paths, folder = [], ""
+    for line in block.splitlines()[1:]:
+        entry, _, description = line.strip().partition("  ")
+        if line.startswith("    ") and not line.startswith("     "):
+            folder = entry if entry.endswith("/") else ""
+            paths.append(entry)
+        else:
+            description = line.strip()
+        names = re.findall(r"(?:[\w<>*-]+/)*[\w<>*.-]+\.(?:md|csv|vtk|vtu|json|npz|png|log)\b"
+                           r"|[\w<>-]+/(?=[,:\s]|$)", description)  # fmt: skip
+        paths += [folder + name for name in names if folder]
+    return [re.sub(r"<\w+>", "*", path) for path in paths]
+
+
+def test_the_tutorial_names_what_the_route_wrote(route):
+    """Every file and folder docs/tutorial_own_data.md says the route writes, it wrote."""
+    folder, *_ = route
+    results = folder / "study_results"
+    expected = tree_of_the_tutorial(TUTORIAL.read_text(encoding="utf-8"))
+    assert "analysis/model_vertices.csv" in expected and "tracked/*/frame_*.vtk" in expected
+    missing = [
+        path
+        for path in expected
+        if path not in NOT_MADE_HERE and not list(results.glob(path.rstrip("/")))
+    ]
+    assert not missing, f"named in {TUTORIAL.name} but not written by the route: {missing}"
