@@ -44,7 +44,8 @@ __all__ = [
     "EVIDENCE_PAGES",
 ]
 
-#: The user guide: the README and the pages of ``docs/`` (what to do, what a result means).
+#: The README and the pages of ``docs/``: the user guide and the library (what to do, what a
+#: result means; ``docs/index.md`` lists which is which).
 GUIDE_PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 #: The evidence: the validation and benchmark reports of ``docs/evidence/`` the guide links to.
 EVIDENCE_PAGES = sorted((ROOT / "docs" / "evidence").glob("*.md"))

@@ -1,6 +1,7 @@
 """The documentation's pages, by purpose, as the benchmarks' table writer knows them.
 
-``GUIDE_PAGES``: the user guide (``README.md`` and ``docs/*.md``); ``EVIDENCE_PAGES``:
+``GUIDE_PAGES``: the user guide and the library (``README.md`` and ``docs/*.md``;
+``tests/test_docs_sizes.py`` tells them apart by ``docs/index.md``); ``EVIDENCE_PAGES``:
 the validation and benchmark reports (``docs/evidence/*.md``); ``PAGES``: both, every
 page whose generated regions ``benchmarks/generated_tables.py`` keeps up to date.
 """
