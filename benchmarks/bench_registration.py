@@ -9,7 +9,7 @@ towards convergence. Each case runs in its own subprocess so that its peak resid
 memory (``ru_maxrss``) is measured alone.
 
 ``--scale s`` multiplies the twist and the bend by ``s`` (the table of
-``docs/lddmm.md`` on how the 100-iteration gap depends on the deformation's size).
+``docs/evidence/developer_notes.md`` on how the 100-iteration gap depends on the deformation's size).
 
 Usage: ``python benchmarks/bench_registration.py [--quick] [--backend numba|numpy] [--scale s]
 [--publish]``; ``--publish`` writes the table ``docs/generated/registration.md`` (with the CPU).

@@ -123,7 +123,7 @@ def test_the_twist_is_recovered_from_a_tagged_short_axis_stack():
     1.5 x 1.5 x 8 mm, tagged, systole in four steps, every frame registered to ED (the
     default scheme) with the benchmark's settings. Measured: tracked 8.3 degrees, true
     7.9; with ITK's Gaussian image gradient (sigma 8 mm) the twist is lost
-    (docs/tracking_cine.md)."""
+    (docs/evidence/cine_evidence.md)."""
     cohort = make_synthetic_cohort(1, n_vertices=241)
     params, ed = cohort.subjects[0].parameters, cohort.subjects[0].ed
     affine = np.diag([1.5, 1.5, 8.0, 1.0])
@@ -169,7 +169,7 @@ def test_frames_registered_to_ed_follow_the_motion(case, referenced):
     print(f"ED-referenced ES: normal {normal:.2f} tangential {tangential:.2f} motion {motion:.2f}")
     # measured (default wall mask): normal 0.2 mm, tangential 3.5 mm, on a motion of
     # 9.1 mm in two steps of half the motion each (a whole cycle has many small steps:
-    # docs/tracking_cine.md)
+    # docs/evidence/cine_evidence.md)
     assert normal < 1.0, normal
     assert total < 0.45 * motion, (total, motion)
 

@@ -1,7 +1,7 @@
 """The settings the documentation recommends, each with the measurement that decides it.
 
 :data:`RECOMMENDED_ALPHA2`: the alpha^2 of the registrations whose transported motion
-goes into group statistics. docs/population.md ("Which to use when") measures it on
+goes into group statistics. docs/evidence/population_evidence.md ("Which to use when") measures it on
 the synthetic two-group cohort (40 subjects, a mild hypokinesia, a fifth of the
 motion, in 4 AHA segments): the LDDMM pole ladder with residuals finds the region at
 alpha^2 = 100 (power 0.98, Dice 0.98) and loses it at alpha^2 = 1 (power 0.23) and

@@ -27,7 +27,7 @@ from numba import njit
 #: process takes a core, the spinning threads and the loop's own threads fight for it
 #: and a parallel sum becomes several times slower than the serial one. With 1,000
 #: spins it costs nothing alone and stays near the serial time under load
-#: (``benchmarks/bench_threads_under_load.py``, table in ``docs/solvers.md``). A value
+#: (``benchmarks/bench_threads_under_load.py``, table in ``docs/evidence/performance.md``). A value
 #: the user set is kept; it must be set before OpenMP starts: numba starts it at the
 #: first parallel loop, not at import.
 GOMP_SPINCOUNT = "1000"

@@ -6,7 +6,7 @@ deformation in proportion to its momentum, so the curvature along ``c_j`` grows
 like ``|mu_j|^2`` and vanishes for a control point without momentum, while the
 curvature along the momenta is that of the fixed-point problem. A quasi-Newton
 method started with a scaled identity then creeps along the stiff and the flat
-directions alike (``docs/lddmm.md`` measures it).
+directions alike (``docs/evidence/developer_notes.md`` measures it).
 
 :class:`JointPreconditioner` whitens both with the Gauss-Newton matrix of the
 linearised deformation at the current iterate: with

@@ -98,7 +98,7 @@ def add_analyze_parser(sub) -> None:
     add_alpha2(p, None, "alpha^2 values to analyse (default: every one of the study); the "
                         "main motion (the terminal's line, the figures) is the pole ladder with "
                         f"residuals at the study's alpha^2 nearest {RECOMMENDED_ALPHA2:g}, the "
-                        "value for group statistics (docs/population.md)")  # fmt: skip
+                        "value for group statistics (docs/population.md, 'Choosing the transport and alpha^2')")  # fmt: skip
     p.add_argument("--transport", nargs="+", default=None,
                    help="transport methods to analyse, e.g. pole_ladder_residual fanning none")  # fmt: skip
     add_permutations(p)

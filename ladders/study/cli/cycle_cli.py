@@ -52,7 +52,7 @@ def add_cycle_parsers(sub) -> None:
     add_output(p, "symladders-output/cycle_study", "the study's folder")
     p.add_argument("--alpha2", type=positive_float, default=RECOMMENDED_ALPHA2, metavar="A",
                    help="the regularisation alpha^2 of the registrations (eq. 3): one value, the "
-                        "one for group statistics (docs/population.md, 'Which to use when': "
+                        "one for group statistics (docs/population.md, 'Choosing the transport and alpha^2': "
                         "never an LDDMM transport at small alpha^2)")  # fmt: skip
     p.add_argument("--deformation", type=one_deformation, default="lddmm", metavar="NAME",
                    help="deformation model of the registrations and the pole ladder, a "

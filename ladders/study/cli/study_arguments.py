@@ -89,7 +89,7 @@ def _add_input_arguments(p) -> None:
         "alpha^2 values of the registrations (eq. 3); default: the paper's sweep "
         f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)} (its Table 1). Group statistics on the "
         f"transported motion ('symladders analyze') use one value, alpha^2 = "
-        f"{RECOMMENDED_ALPHA2:g} (docs/population.md, 'Which to use when'): to transport "
+        f"{RECOMMENDED_ALPHA2:g} (docs/population.md, 'Choosing the transport and alpha^2'): to transport "
         f"for them only, --alpha2 {RECOMMENDED_ALPHA2:g}",
     )
     p.add_argument(
@@ -174,7 +174,7 @@ def _add_model_arguments(p) -> None:
         "--solver",
         choices=sorted(SOLVERS),
         default=d.solver,
-        help="optimiser of the registrations (docs/lddmm.md, 'Solvers')",
+        help="optimiser of the registrations (docs/solvers.md)",
     )
     p.add_argument(
         "--stopping",

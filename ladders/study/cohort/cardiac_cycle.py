@@ -19,7 +19,7 @@ the ED endocardial radius ``rho_e(u, phi)``, ``rho_e' = (1 - f r) rho_e``::
 the endocardium the volume is kept, the wall is incompressible and thickens; ``f = 1``
 moves the ED endocardium onto the ES surface. Below the apex and above the base the
 fields are those of ``u = 0`` and ``u = 1``, ``rho_e = 0`` below the apex (the cap widens
-as it shortens). See ``docs/cohort.md`` ("The whole cycle").
+as it shortens). See ``docs/evidence/synthetic_cohort.md`` ("The whole cycle").
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ parametric model of the left-ventricle endocardium: a prolate half-ellipsoid,
 apex at the origin and open at the base plane, with subject-specific size,
 eccentricity and wall shape, and an end-systolic motion made of longitudinal
 shortening, radial contraction and a base-to-apex twist. The model, its
-parameter ranges and the atlas are described in ``docs/cohort.md``. Units are
+parameter ranges and the atlas are described in ``docs/evidence/synthetic_cohort.md``. Units are
 millimetres.
 """
 
@@ -36,7 +36,7 @@ class SyntheticLVModel:
     """Parameter ranges of the synthetic left-ventricle model (all uniform draws).
 
     Lengths are in millimetres, rotations in degrees, the other ranges are
-    dimensionless fractions. See ``docs/cohort.md`` for the formulas.
+    dimensionless fractions. See ``docs/evidence/synthetic_cohort.md`` for the formulas.
 
     Attributes
     ----------

@@ -187,7 +187,7 @@ def normalize_motion(
         which the analysis applies to the atlas, is brought to the subject's own
         volume change on the atlas (the normalisation with no transport at all; for
         groups whose anatomy differs it is as close to the ideal transport as the best
-        transports, ``docs/population.md``).
+        transports, ``docs/evidence/population_evidence.md``).
     """
     n = len(motion.subjects)
     if volume_ratios is None:

@@ -59,7 +59,7 @@ class CineTrackingSettings:
         (``sampling_percentage`` is then a fraction of those voxels); None samples the
         whole image. On the whole-cycle cohort of short-axis stacks, 4 mm gave lower
         errors across the wall and along it than 10 mm, and the power of the group
-        test its target (``docs/population.md``, table ``cycle_cine_mask``). Not used with ``reference="consecutive"``, whose fixed frames are
+        test its target (``docs/evidence/cycle_evidence.md``, table ``cycle_cine_mask``). Not used with ``reference="consecutive"``, whose fixed frames are
         not ED: there the wall has moved away from that region.
     seed : int, default 0
         Seed of the metric's random sampling (given to ITK as ``seed + 1``: ITK reads 0
