@@ -70,6 +70,9 @@ class AtlasResult:
     cpu_seconds : list of float
         Per iterate (the start first), the processor time of its registrations, summed
         over the subjects (core-seconds, whatever the number of workers).
+    moves : list of float
+        Per iteration, how far it moved the atlas (per-vertex RMS; what ``tol`` is
+        compared with).
     """
 
     vertices: np.ndarray
@@ -84,6 +87,7 @@ class AtlasResult:
     landmarks: Landmarks | None = None
     n_registrations: int = 0
     cpu_seconds: list = field(default_factory=list)
+    moves: list = field(default_factory=list)
 
 
 def _start(meshes, initial, corresponding):
@@ -236,12 +240,14 @@ def estimate_atlas(
                            cache_size=0)  # fmt: skip
     logs = AtlasLogs(settings.alpha, space.settings, jobs=jobs)
     w = _weights(weights, len(meshes))
-    objectives, previous = [], [start_v]
+    objectives, previous, moves = [], [start_v], []
 
     def report(it, x, gnorm):
         objectives.append(logs.objective(w))  # of the registrations just run
         moved = float(np.sqrt(((x - previous[-1]) ** 2).sum(1).mean()))
         previous.append(x)
+        if it > 0:
+            moves.append(moved)
         if checkpoint is not None:
             checkpoint(it, np.array(x))
         if progress is not None:
@@ -256,7 +262,7 @@ def estimate_atlas(
     return AtlasResult(
         np.array(res.mean), start_f, res.converged, res.n_iter, objectives, res.gradient_norms,
         transforms, not surface, res.message, atlas_lm, logs.n_registrations,
-        logs.cpu_seconds,
+        logs.cpu_seconds, moves,
     )  # fmt: skip
 
 

@@ -66,6 +66,7 @@ def atlas_record(output, inputs, settings, label, result, tol, max_iter, interru
         "gradient_norms": result.get("gradient_norms", []),
         "n_registrations": result.get("n_registrations"),
         "cpu_seconds": result.get("cpu_seconds"),
+        "moves": result.get("moves"),
         "term": result["term"],
         "start": label,
         "tol": tol,
