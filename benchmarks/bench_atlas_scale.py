@@ -151,14 +151,17 @@ def part_scale(work: Path, sizes, jobs: int) -> list[dict]:
     rows = []
     for n in sizes:
         print(f"atlas of {n} subjects", flush=True)
-        rows.append(timed_atlas(work, f"all_{n}", _inputs(work, n), jobs))
+        rows.append(timed_atlas(work, f"all_{n}", _inputs(work, n), jobs, subset=None))
     return rows
 
 
 def part_evaluations(work: Path, sizes, jobs: int) -> list[dict]:
     """The start's evaluation alone (``max_iter=0``: one registration per subject) on the
     first N subjects: what one evaluation costs at sizes a whole atlas is not run at."""
-    return [timed_atlas(work, f"start_{n}", _inputs(work, n), jobs, max_iter=0) for n in sizes]
+    return [
+        timed_atlas(work, f"start_{n}", _inputs(work, n), jobs, max_iter=0, subset=None)
+        for n in sizes
+    ]
 
 
 def fit_growth(rows) -> tuple[float, float]:

@@ -220,3 +220,6 @@ def test_atlas_of_a_subset_and_a_rerun_that_reuses_it(atlas_folder, tmp_path):
     assert status == 0 and "converged after 1" in fresh.splitlines()[-1]
     status, _, err = run_cli(*argv[:5], "--subset", "0")
     assert status == 2 and "--subset" in err
+    status, _, _ = run_cli(*argv[:5], "--subset", "all", "--max-iter", "1", "-j", "1")
+    record = json.loads((tmp_path / "T.json").read_text())
+    assert status == 0 and record["subset"] is None and len(record["subjects"]) == 2

@@ -38,10 +38,17 @@ from .preparation_arguments import (
 __all__ = ["add_atlas_parser", "run_atlas_command"]
 
 
-def _library_default(name: str):
+def _library_default(name: str, build: bool = False):
     from ..preparation.atlas import estimate_atlas
+    from ..preparation.atlas_run import build_atlas
 
-    return inspect.signature(estimate_atlas).parameters[name].default
+    function = build_atlas if build else estimate_atlas
+    return inspect.signature(function).parameters[name].default
+
+
+def _subset_count(text: str) -> int | None:
+    """``all`` (None) or a positive number of subjects."""
+    return None if str(text).strip().lower() == "all" else positive_int(text)
 
 
 def add_atlas_parser(sub) -> None:
@@ -104,11 +111,12 @@ def add_atlas_parser(sub) -> None:
     )  # fmt: skip
     add_units_arguments(p, reference="that of the mesh of median size (taken to be in mm)")
     p.add_argument(
-        "--subset", type=positive_int, default=None, metavar="N",
-        help="estimate the atlas from N subjects chosen by --subset-rule (all of them when "
-        "the folder has at most N), each weighted by the share of the cohort it stands for; "
-        "the record names them; every subject is then corresponded to it as usual; "
-        "default: every subject",
+        "--subset", type=_subset_count, default=_library_default("subset", build=True),
+        metavar="N|all",
+        help="estimate the atlas from N subjects chosen by --subset-rule (every subject when "
+        "the folder has at most N; 'all': every subject), each weighted by the share of the "
+        "cohort it stands for; the record names them; every subject is then corresponded to "
+        "it as usual",
     )  # fmt: skip
     p.add_argument(
         "--subset-rule", choices=SUBSET_RULES, default="stratified",
@@ -153,9 +161,10 @@ def run_atlas_command(args) -> int:
         _, term = atlas_term(inputs, initial, args.term)
     except ValueError as exc:
         raise UsageError(f"symladders atlas: error: --{exc}") from None
-    subset = "" if args.subset is None else f" ({args.subset_rule} subset of {args.subset})"
-    if args.subset is not None and args.start is None:
-        label = "the subset's first subject"
+    subset = ""
+    if args.subset is not None and args.subset < len(inputs.names):
+        subset = f" ({args.subset_rule} subset of {args.subset})"
+        label = label if args.start is not None else "the subset's first subject"
     print_line(
         f"symladders atlas: {len(inputs.names)} ED mesh(es) from {args.meshes}{subset}, {term} "
         f"term, start {label}, output {args.output}"

@@ -159,7 +159,7 @@ def build_atlas(
     progress: Callable | None = None,
     inputs: AtlasInputs | None = None,
     landmarks=None,
-    subset: int | None = None,
+    subset: int | None = 50,
     subset_rule: str = "stratified",
     subset_seed: int = 0,
     jobs: int = 1,
@@ -187,11 +187,12 @@ def build_atlas(
     landmarks : str, Path, dict or False, optional
         A landmark table (:mod:`.landmarks`) or ``{subject: Landmarks}``; by default
         ``landmarks.csv`` of the folder when there is one; False: none.
-    subset : int, optional
-        Estimate the atlas from this many subjects, chosen by ``subset_rule``
-        (:func:`~.atlas_subset.choose_atlas_subset` on every mesh's
-        :func:`~.atlas_subset.shape_descriptor`), each weighted by the share of the
-        cohort it stands for; the record names them. None: every subject.
+    subset : int or None, default 50
+        Estimate the atlas from this many subjects (every subject when there are at most
+        that many), chosen by ``subset_rule`` (:func:`~.atlas_subset.choose_atlas_subset`
+        on every mesh's :func:`~.atlas_subset.shape_descriptor`), each weighted by the
+        share of the cohort it stands for; the record names them. None: every subject.
+        (The default: ``docs/preparation.md``, "The atlas at population scale".)
     subset_rule : {"stratified", "random"}
     subset_seed : int, default 0
     jobs : int, default 1
