@@ -49,6 +49,9 @@ def test_parallel_registrations_give_the_serial_atlas_and_register_once_per_subj
     np.testing.assert_allclose(parallel.vertices, serial.vertices, atol=1e-8 * scale)
     np.testing.assert_allclose(parallel.objectives, serial.objectives, rtol=1e-8)
     assert serial.n_registrations == parallel.n_registrations == 3 * (serial.n_iter + 1)
+    moved = np.sqrt(((serial.vertices - meshes[0][0]) ** 2).sum(1).mean())
+    assert len(serial.moves) == 1 and abs(serial.moves[0] - moved) < 1e-9 * scale
+    assert len(serial.cpu_seconds) == 2 and min(serial.cpu_seconds) > 0
 
 
 def test_the_weights_make_the_weighted_karcher_mean(cohort):
