@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
+import ladders.study.preparation.atlas_registrations as registrations
 import ladders.study.preparation.atlas_run as atlas_run
-from ladders.study import write_mesh
+from ladders.study import read_mesh, write_mesh
 from ladders.study.cohort.synthetic_lv import make_synthetic_cohort
 from ladders.study.preparation import (
     build_atlas,
@@ -134,3 +135,28 @@ def test_a_subset_atlas_names_its_subjects_and_a_rerun_reuses_it(folder, tmp_pat
         build_atlas(folder, output, FAST, subset=2, max_iter=1, resume=False)
     with pytest.raises(ValueError, match="^subset: choose_atlas_subset: n|^subset: n"):
         build_atlas(folder, output, FAST, subset=0)
+
+
+def test_an_interruption_during_the_registrations_keeps_the_last_iterate(
+    folder, tmp_path, monkeypatch
+):
+    """Ctrl-C while an iteration's registrations run (in the batch runner): the iterate
+    reached before is written with its record, marked interrupted, and is not reused."""
+    calls, iterates = [], []
+    real = registrations.AtlasLogs.__call__
+
+    def interrupted(self, atlas, targets):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        iterates.append(np.array(atlas))
+        return real(self, atlas, targets)
+
+    monkeypatch.setattr(registrations.AtlasLogs, "__call__", interrupted)
+    output = tmp_path / "T.vtk"
+    with pytest.raises(atlas_run.AtlasInterrupted, match="iteration 1 was written"):
+        build_atlas(folder, output, FAST, max_iter=5, tol=0.0)
+    record = json.loads(output.with_suffix(".json").read_text())
+    assert record["interrupted"] and record["n_iter"] == 1
+    np.testing.assert_allclose(read_mesh(output)[0], iterates[1], atol=1e-5)
+    assert atlas_run.reusable_atlas(output, record["key"]) is None
