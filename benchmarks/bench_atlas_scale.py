@@ -63,7 +63,13 @@ from bench_tutorial import write_image_cohort  # noqa: E402
 from generated_tables import publish, publish_rows  # noqa: E402
 
 from ladders.study.meshes import read_mesh  # noqa: E402
-from ladders.study.preparation import procrustes, read_atlas_inputs, surface_distances  # noqa: E402
+from ladders.study.preparation import (  # noqa: E402
+    icp_align,
+    procrustes,
+    read_atlas_inputs,
+    surface_distances,
+    vertex_error_components,
+)
 from ladders.study.preparation.atlas_run import build_atlas  # noqa: E402
 
 MESH = ("symladders mesh images/*.nii.gz --label 1 --rv-label 2 --cut-planes planes.csv "
@@ -173,16 +179,20 @@ def fit_growth(rows) -> tuple[float, float]:
 
 
 def atlas_distance(work: Path, name: str, reference: str) -> dict:
-    """Per-vertex RMS (after Procrustes) and mean surface distance of two atlases that
-    share a triangulation (the same start)."""
+    """Per-vertex RMS after Procrustes (split along the reference's normals and along its
+    surface) of two atlases that share a triangulation (the same start), and the mean
+    surface distance; atlases from different starts: rigid ICP, the surface distance only."""
     v, f = read_mesh(work / "atlases" / f"{name}.vtk")
     ref, ref_f = read_mesh(work / "atlases" / f"{reference}.vtk")
-    if v.shape != ref.shape:
-        raise ValueError(f"{name} and {reference} do not share a triangulation")
+    if v.shape != ref.shape or not np.array_equal(f, ref_f):
+        moved = icp_align(v, f, ref, ref_f)[0].apply(v)
+        surface = surface_distances(moved, f, ref, ref_f)["mean_surface_distance"]
+        return {"surface": float(surface)}
     moved = procrustes(v, ref).apply(v)
-    rms = float(np.sqrt(((moved - ref) ** 2).sum(1).mean()))
+    parts = vertex_error_components(ref, moved, ref_f)
     surface = surface_distances(moved, f, ref, ref_f)["mean_surface_distance"]
-    return {"rms": rms, "surface": float(surface)}
+    return {"rms": parts["total"], "normal": parts["normal"], "tangential": parts["tangential"],
+            "surface": float(surface)}  # fmt: skip
 
 
 def part_subset(work: Path, n_cohort: int, sizes, seeds, jobs: int) -> list[dict]:
@@ -198,6 +208,8 @@ def part_subset(work: Path, n_cohort: int, sizes, seeds, jobs: int) -> list[dict
                                      subset_seed=seed, start=start)  # fmt: skip
                 rows.append({"size": size, "rule": rule, "seed": seed, **timing,
                              **atlas_distance(work, name, f"all_{n_cohort}")})  # fmt: skip
+    # the atlas of all from another start: how far two estimates of one mean lie apart
+    timed_atlas(work, f"all_{n_cohort}_start2", inputs, jobs, subset=None, start=inputs.names[1])
     return rows
 
 
@@ -438,18 +450,20 @@ def subset_table(work: Path, cohort_n: int, subset_n: int) -> str:
         p.stem.removesuffix(".timing")
         for p in (work / "atlases").glob(f"*_{subset_n}_of_{cohort_n}.timing.json")
     )
+    names.append(f"all_{subset_n}")  # the first subset_n subjects: neither rule
+    names.append(f"{ref}_start2")  # all of them, from another start
     lines = [
         f"The atlas (`symladders atlas` defaults: varifold term, landmark table, start at "
         f"the first subject, `tol` 0.1 mm, at most 10 iterations) of the first {cohort_n} "
         f"subjects' label-image ED meshes, and of subsets of {subset_n} of them with the same "
-        "start (so every atlas has its triangulation and the distances compare the same "
-        "points); then `symladders correspond`, `study --alpha2 100` on the "
+        "start (so all share its triangulation: vertex i of every atlas comes from vertex i of "
+        "the start); then `symladders correspond`, `study --alpha2 100` on the "
         f"{cohort_n} subjects with each atlas, and the planted region's power / Dice "
         "(vertex max-t, FWER 5 %, 1,000 permutations; the region carried onto each atlas "
         "from the generator's mean shape by closest vertex).",
         "",
         "| atlas | iterations (converged) | last moves (mm) | to the atlas of all: per-vertex "
-        "RMS / mean surface distance (mm) | correspondence ED: median mean surface distance "
+        "RMS (along the normals / along the surface) / mean surface distance (mm) | correspondence ED: median mean surface distance "
         "/ Hausdorff (mm), flagged | power / Dice per transport |",
         "|---|---:|---|---:|---:|---|",
     ]  # fmt: skip
@@ -458,8 +472,10 @@ def subset_table(work: Path, cohort_n: int, subset_n: int) -> str:
         if t is None:
             continue
         moves = ", ".join(f"{m:.2f}" for m in (t.get("moves") or [])[-3:]) or "-"
-        dist = "-" if name == ref else "{rms:.2f} / {surface:.2f}".format(
-            **atlas_distance(work, name, ref))  # fmt: skip
+        found = {} if name == ref else atlas_distance(work, name, ref)
+        dist = "-" if not found else f"- / {found['surface']:.2f}"
+        if "rms" in found:
+            dist = "{rms:.2f} ({normal:.2f} / {tangential:.2f}) / {surface:.2f}".format(**found)
         folder = work / "route" / name
         quality = scores = "-"
         if (folder / "analyze.json").is_file():
@@ -468,36 +484,46 @@ def subset_table(work: Path, cohort_n: int, subset_n: int) -> str:
             quality = (f"{q['mean_surface_distance']:.2f} / {q['hausdorff']:.2f}, "
                        f"{q['flagged']} of {q['meshes']}")  # fmt: skip
             scores = _transports(r["scores"])
-        lines.append(f"| {name} | {t['n_iter']} ({'yes' if t['converged'] else 'no'}) | "
+        labels = {ref: f"all {cohort_n}", f"all_{subset_n}": f"the first {subset_n}",
+                  f"{ref}_start2": f"all {cohort_n}, from the second subject"}  # fmt: skip
+        label = labels.get(name, name.replace("0_", " ").replace("_of_", " of ").replace("_", " "))
+        lines.append(f"| {label} | {t['n_iter']} ({'yes' if t['converged'] else 'no'}) | "
                      f"{moves} | {dist} | {quality} | {scores} |")  # fmt: skip
     return "\n".join(lines)
 
 
 def scale_row(work: Path, cohort_n: int, subset: int, n_target: int) -> dict:
-    cells = {}
-    for n in (12, 24, 50, 100, 200):
-        t = _timing(work, f"all_{n}") or _timing(work, f"start_{n}")
-        if t is None:
-            continue
-        per = np.array(t["cpu_seconds"]) / t["subjects"]
-        later = f", then {per[1:].mean():.1f}" if len(per) > 1 else ""
-        cells[f"{n} subjects"] = (
-            f"{len(per)} evaluation(s); s each: {t['seconds'][0]:.0f}"
-            + (f", then {np.mean(t['seconds'][1:]):.0f}" if len(per) > 1 else "")
-            + f"; core-s per registration {per[0]:.1f}{later}; load "
-            f"{min(t['loads']):.0f}-{max(t['loads']):.0f}"
-        )  # fmt: skip
+    """The per-CPU row: the atlases' cost against the subjects, the route's per subject, the
+    extrapolation."""
+    runs = {
+        n: _timing(work, f"all_{n}") or _timing(work, f"start_{n}") for n in (12, 24, 50, 100, 200)
+    }
+    runs = {n: t for n, t in runs.items() if t is not None}
+    walls, loads = [], []
+    for n, t in runs.items():
+        later = f", then {np.mean(t['seconds'][1:]):.0f}" if len(t["seconds"]) > 1 else ""
+        walls.append(f"{n}: {len(t['seconds'])}, {t['seconds'][0]:.0f}{later} s")
+        loads += t["loads"]
+    n = np.array(list(runs), dtype=float)
+    first = np.array([t["cpu_seconds"][0] for t in runs.values()])
+    b, a = np.polyfit(n, first, 1)
+    later = [c / t["subjects"] for t in runs.values() for c in t["cpu_seconds"][1:]]
     x = extrapolate(work, n_target, subset, cohort_n)
     st = x["steps"]
-    cells["per subject (core-s)"] = (
-        f"mesh {st['mesh']:.2f}, correspond {st['correspond']:.1f}, study {st['study']:.1f}, "
-        f"analyze {st['analyze']:.2f}; atlas alignment {alignment_cost(work):.1f}"
-    )  # fmt: skip
-    cells[f"{n_target:,} subjects, atlas of {subset}"] = (
-        f"atlas {x['atlas']:.0f} core-s; route {x['total']:.0f} core-s = "
-        f"{x['hours_on_2_cores']:.2f} h on 2 cores"
-    )  # fmt: skip
-    return cells
+    return {
+        "subjects: evaluations, wall time of the start's and of each later one (2 workers)":
+            "; ".join(walls),
+        "core-s per registration: start / later": f"{first.sum() / n.sum():.1f} / "
+            f"{np.mean(later):.1f}",
+        "core-s of the start's evaluation, fit": f"{a:.0f} + {b:.2f} N",
+        "route, core-s per subject": f"mesh {st['mesh']:.2f}, correspond "
+            f"{st['correspond']:.1f}, study {st['study']:.1f}, analyze {st['analyze']:.2f} "
+            f"(its {cohort_n} subjects' time / {cohort_n}); atlas alignment "
+            f"{alignment_cost(work):.1f}",
+        f"{n_target:,} subjects, atlas of {subset}": f"atlas {x['atlas']:.0f} core-s; route "
+            f"{x['total']:.0f} core-s = {x['hours_on_2_cores']:.2f} h on 2 cores",
+        "load": f"{min(loads):.0f}-{max(loads):.0f}",
+    }  # fmt: skip
 
 
 def publish_all(work: Path, cohort_n: int, subset_n: int) -> None:
