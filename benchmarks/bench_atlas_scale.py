@@ -5,7 +5,7 @@
     python benchmarks/bench_atlas_scale.py --work WORK --publish   # the tables, from WORK
 
 The cohort is that of the own-data tutorial, as label images
-(:func:`bench_tutorial.write_image_cohort`: the two-group synthetic cohort, the
+(:func:`write_label_images`: the two-group synthetic cohort, the
 hypokinesia in half the subjects, 1.5 mm voxels, LV and RV labels, the valve planes),
 ``--subjects`` of them (default 200), meshed by the tutorial's ``symladders mesh``
 command (about 1,000 vertices per mesh). Parts:
@@ -59,7 +59,6 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from bench_tutorial import write_image_cohort  # noqa: E402
 from generated_tables import publish, publish_rows  # noqa: E402
 
 from ladders.study.meshes import read_mesh  # noqa: E402
@@ -71,6 +70,7 @@ from ladders.study.preparation import (  # noqa: E402
     vertex_error_components,
 )
 from ladders.study.preparation.atlas_run import build_atlas  # noqa: E402
+from ladders.study.preparation.landmarks import read_landmarks, write_landmarks  # noqa: E402
 
 MESH = ("symladders mesh images/*.nii.gz --label 1 --rv-label 2 --cut-planes planes.csv "
         "--vertices 1000 -o meshes")  # fmt: skip
@@ -113,10 +113,55 @@ def _stored(path: Path, make) -> dict:
     return value
 
 
+def write_label_images(
+    folder, n_subjects: int = 20, spacing: float = 1.5, n_vertices: int = 1009, seed: int = 0
+):
+    """Label images, ``planes.csv`` and ``groups.csv`` of a synthetic two-group cohort, as
+    the own-data tutorial's cohort was written when the tables were measured (subjects
+    ``case01``, ...; LV label 1, RV label 2; each frame's valve plane in ``planes.csv``).
+
+    Returns the :class:`~ladders.study.population.TwoGroupCohort` (its subjects renamed
+    ``case01``, ... as the files are) and ``{old name: new name}``.
+    """
+    from ladders.study.imaging import add_rv_label, voxelize, write_label_image
+    from ladders.study.population import make_two_group_cohort
+    from ladders.study.preparation.synthetic_landmarks import synthetic_landmarks
+
+    folder = Path(folder)
+    images = folder / "images"
+    data = make_two_group_cohort(n_subjects, n_vertices=n_vertices, seed=seed)
+    names = {s.name: f"case{i + 1:02d}" for i, s in enumerate(data.cohort.subjects)}
+    planes = []
+    for s in data.cohort.subjects:
+        both = np.vstack([s.ed, s.es])
+        low = both.min(axis=0) - 22.0  # room for the right ventricle beside the septum
+        shape = tuple(int(n) for n in np.ceil((both.max(axis=0) + 22.0 - low) / spacing))
+        affine = np.diag([spacing, spacing, spacing, 1.0])
+        affine[:3, 3] = low
+        apex = synthetic_landmarks(s.ed).apex
+        for phase in ("ed", "es"):
+            v = getattr(s, phase)
+            top = (0.0, 0.0, float(v[:, 2].max()))  # the valve plane of this frame, z up
+            labels = voxelize(v, data.cohort.faces, affine, shape, label=1)
+            labels = add_rv_label(labels, affine, apex, top, (-1.0, 0.0, 0.0), rv_label=2)
+            name = f"{names[s.name]}_{phase}.nii.gz"
+            write_label_image(images / name, labels, affine)
+            planes.append((name, *top, 0.0, 0.0, 1.0))
+    with open(folder / "planes.csv", "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(["image", "x", "y", "z", "nx", "ny", "nz"])
+        writer.writerows([p[0], *(f"{x:.3f}" for x in p[1:])] for p in planes)
+    with open(folder / "groups.csv", "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(["subject", "group"])
+        writer.writerows((names[k], g) for k, g in data.groups.items())
+    return data, names
+
+
 def cohort(work: Path, n: int) -> dict:
     """The label images and their meshes (``symladders mesh``, timed) of ``n`` subjects."""
     if not (work / "groups.csv").is_file():
-        write_image_cohort(work, n, 1.5)
+        write_label_images(work, n, 1.5)
     return _stored(work / "times" / "mesh.json", lambda: {**_cli(MESH, work), "subjects": n})
 
 
@@ -140,8 +185,9 @@ def timed_atlas(work: Path, name: str, inputs, jobs: int, **options) -> dict:
             print(f"  {name}: iteration {it}: objective {objective:.6g}, "
                   f"{marks[-1] - marks[-2]:.0f} s, load {loads[-1]}", flush=True)  # fmt: skip
 
+        table = read_landmarks(work / "meshes" / "landmarks.csv")  # the subjects' rows only
         run = build_atlas(work / "meshes", output, inputs=inputs, jobs=jobs, progress=progress,
-                          landmarks=work / "meshes" / "landmarks.csv", **options)  # fmt: skip
+                          landmarks={n: table[n] for n in inputs.names}, **options)  # fmt: skip
         return {
             "subjects": len(run.record["subjects"]), "n_iter": run.record["n_iter"],
             "converged": run.record["converged"], "seconds": list(np.diff(marks)),
@@ -273,7 +319,8 @@ def _sample(work: Path, n: int) -> Path:
         for name in names:
             for phase in ("ed", "es"):
                 (folder / f"{name}_{phase}.vtk").symlink_to(work / "meshes" / f"{name}_{phase}.vtk")
-        (folder / "landmarks.csv").write_text((work / "meshes" / "landmarks.csv").read_text())
+        table = read_landmarks(work / "meshes" / "landmarks.csv")
+        write_landmarks(folder / "landmarks.csv", {n: table[n] for n in names})
     rows = (work / "groups.csv").read_text().splitlines()
     keep = set(names)
     (work / f"groups_{n}.csv").write_text(

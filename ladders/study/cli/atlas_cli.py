@@ -19,11 +19,11 @@ from .cli_types import (
     DefaultsFormatter,
     UsageError,
     existing_folder,
-    jobs_count,
     nonnegative_int,
     positive_float,
     positive_int,
 )
+from .common_arguments import add_batch_arguments, add_output, parallel_backend
 from .preparation_arguments import (
     add_data_term_arguments,
     add_landmark_arguments,
@@ -75,12 +75,11 @@ def add_atlas_parser(sub) -> None:
         help="folder of meshes: <name>_ed.<ext> (or <name>/ed.<ext>), any vertex count; ES "
         "meshes and an atlas.<ext> there are not used",
     )
-    p.add_argument(
-        "--output",
-        "-o",
-        type=mesh_output_file,
-        default="symladders-output/atlas.vtk",
-        help="the atlas's file; the extension chooses the format (vtk, vtu, ply, obj, off, stl)",
+    add_output(
+        p,
+        "symladders-output/atlas.vtk",
+        "the atlas's file; the extension chooses the format (vtk, vtu, ply, obj, off, stl)",
+        file_type=mesh_output_file,
     )
     p.add_argument(
         "--start",
@@ -126,14 +125,11 @@ def add_atlas_parser(sub) -> None:
     p.add_argument("--subset-seed", type=nonnegative_int, default=0,
                    help="seed of the strata or of the draw")  # fmt: skip
     p.add_argument(
-        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
-    )
-    p.add_argument("--no-progress", action="store_true", help="no line per iteration")
-    p.add_argument(
         "--no-resume", action="store_true",
         help="estimate the atlas again even when OUTPUT holds a finished one with the same "
         "inputs and settings (its record's key)",
     )  # fmt: skip
+    add_batch_arguments(p)
     p.set_defaults(run=run_atlas_command, output_is_file=True)
 
 
@@ -172,14 +168,15 @@ def run_atlas_command(args) -> int:
     for name, reason in inputs.skipped.items():
         print(f"symladders atlas: warning: {name} left out: {reason}", file=sys.stderr)
     try:
-        run = build_atlas(
-            args.meshes, args.output, correspondence_settings(args), start=args.start,
-            term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
-            progress=None if args.no_progress else _progress,
-            landmarks=landmarks_argument(args, args.meshes), subset=args.subset,
-            subset_rule=args.subset_rule, subset_seed=args.subset_seed, jobs=args.jobs,
-            resume=not args.no_resume,
-        )  # fmt: skip
+        with parallel_backend(args, "atlas"):
+            run = build_atlas(
+                args.meshes, args.output, correspondence_settings(args), start=args.start,
+                term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
+                progress=None if args.no_progress else _progress,
+                landmarks=landmarks_argument(args, args.meshes), subset=args.subset,
+                subset_rule=args.subset_rule, subset_seed=args.subset_seed, jobs=args.jobs,
+                resume=not args.no_resume,
+            )  # fmt: skip
     except AtlasInterrupted as exc:
         args.on_interrupt = exc.message
         raise

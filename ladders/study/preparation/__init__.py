@@ -32,6 +32,7 @@ from .alignment import (
     principal_frame,
     procrustes,
     random_rigid_transform,
+    second_moments,
 )
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
 from .atlas_registrations import AtlasLogs, AtlasRegistration
@@ -81,6 +82,7 @@ __all__ = [
     "procrustes",
     "icp_align",
     "principal_frame",
+    "second_moments",
     "random_rigid_transform",
     "AtlasResult",
     "estimate_atlas",

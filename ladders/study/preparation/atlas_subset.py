@@ -27,8 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from manifolds.data_terms.mesh_geometry import check_mesh, triangle_geometry
+from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.validation import check_int
+
+from .alignment import second_moments
 
 __all__ = ["AtlasSubset", "SUBSET_RULES", "choose_atlas_subset", "shape_descriptor"]
 
@@ -60,9 +62,9 @@ class AtlasSubset:
 def shape_descriptor(vertices, faces) -> np.ndarray:
     """The principal RMS extents of a surface about its centroid, largest first.
 
-    The square roots of the eigenvalues of the surface's second-moment tensor
-    ``(1/A) int (x - c)(x - c)^T dA`` (integrated exactly over every triangle): unchanged
-    by a rigid motion and, up to the discretisation, by the triangulation.
+    The square roots of the eigenvalues of the surface's area-weighted second-moment
+    tensor (:func:`~.alignment.second_moments`): unchanged by a rigid motion and, up to the
+    discretisation, by the triangulation.
 
     Parameters
     ----------
@@ -75,19 +77,10 @@ def shape_descriptor(vertices, faces) -> np.ndarray:
         In the meshes' unit.
     """
     v, f = check_mesh(vertices, faces, "shape_descriptor:")
-    tri = v[f]  # (f, 3, 3)
-    centres, normals = triangle_geometry(v, f)
-    area = np.linalg.norm(normals, axis=1)
-    total = area.sum()
-    if not total > 0:
+    _, moments = second_moments(v, f)
+    if not np.isfinite(moments).all():
         raise ValueError("shape_descriptor: the surface has no area")
-    s = 3.0 * centres  # the sum of the corners
-    centroid = (area[:, None] * centres).sum(0) / total
-    # int_T x x^T dA = A/12 (s s^T + sum_j v_j v_j^T), s the sum of the corners
-    second = (area[:, None, None] * (np.einsum("fi,fj->fij", s, s)
-              + np.einsum("fki,fkj->fij", tri, tri))).sum(0) / (12.0 * total)  # fmt: skip
-    moments = np.linalg.eigvalsh(second - np.outer(centroid, centroid))
-    return np.sqrt(np.clip(moments[::-1], 0.0, None))
+    return np.sqrt(np.clip(np.linalg.eigvalsh(moments)[::-1], 0.0, None))
 
 
 def choose_atlas_subset(
