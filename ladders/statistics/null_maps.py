@@ -42,13 +42,14 @@ _INVARIANT_TOL = 1e-10
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _gather(basis, perm, out):  # pragma: no cover - compiled
-    """``out[r, i, j] = basis[r, perm[i, j]]`` for ``basis (p, n)``, ``perm (m, n)``."""
-    p, n = basis.shape
+def _gather(basis_t, perm, out):  # pragma: no cover - compiled
+    """``out[r, i, j] = basis_t[perm[i, j], r]`` for ``basis_t (n, p)``, ``perm (m, n)``."""
+    n, p = basis_t.shape
     for i in prange(perm.shape[0]):
-        for r in range(p):
-            for j in range(n):
-                out[r, i, j] = basis[r, perm[i, j]]
+        for j in range(n):
+            row = perm[i, j]
+            for r in range(p):
+                out[r, i, j] = basis_t[row, r]
 
 
 @njit(cache=True, parallel=True, nogil=True)
@@ -188,12 +189,21 @@ class NullMaps:
         for i in range(d):
             for j in range(i + 1):
                 self.base[i, j] = self.entries[i][j] - (constant[:, i] * constant[:, j]).sum(0)
-        self.basis = np.ascontiguousarray(np.vstack([u_x.T, moving.T]))  # tested rows first
+        self.basis = np.vstack([u_x.T, moving.T])  # (p, n): tested rows first
+        self.basis_t = np.ascontiguousarray(self.basis.T)
+        self._buffers: dict[str, np.ndarray] = {}
 
     def bytes_per_permutation(self) -> int:
         """Memory of one permutation in a chunk: its gathered rows, projections and map."""
         rows, n = self.basis.shape
         return 8 * (rows * n + rows * self.d * self.k + n + 2 * self.k)
+
+    def _buffer(self, name: str, size: int) -> np.ndarray:
+        """A work array of ``size`` floats, reused from chunk to chunk (no fresh pages)."""
+        buffer = self._buffers.get(name)
+        if buffer is None or buffer.size < size:
+            buffer = self._buffers[name] = np.empty(size)
+        return buffer[:size]
 
     def maps(self, perm: np.ndarray) -> np.ndarray:
         """Statistic maps ``(m, k)`` of the permutations ``perm`` ``(m, n)``."""
@@ -202,10 +212,11 @@ class NullMaps:
         perm = np.ascontiguousarray(perm, dtype=np.int64)
         rows, n = self.basis.shape
         m, d, k = perm.shape[0], self.d, self.k
-        gathered = np.empty((rows, m, n))
-        _gather(self.basis, perm, gathered)
-        proj = (gathered.reshape(rows * m, n) @ self.w).reshape(rows, m, d, k)
-        del gathered
+        gathered = self._buffer("gathered", rows * m * n).reshape(rows * m, n)
+        _gather(self.basis_t, perm, gathered.reshape(rows, m, n))
+        proj = self._buffer("proj", rows * m * d * k).reshape(rows * m, d * k)
+        np.matmul(gathered, self.w, out=proj)
+        proj = proj.reshape(rows, m, d, k)
         out = np.empty((m, k))
         _maps_kernel(proj, self.q, self.base, self.floor, float(self.df_resid),
                      KIND_CODES[self.kind], out)  # fmt: skip
