@@ -56,12 +56,12 @@ def _gather(basis_t, perm, out):  # pragma: no cover - compiled
 def _maps_kernel(proj, q, base, floor, df_resid, kind, out):  # pragma: no cover - compiled
     """The statistic of every permutation and vertex from the projections.
 
-    ``proj`` ``(p, m, d, k)``: rows ``r < q`` the tested projections ``s_r``, the others the
+    ``proj`` ``(p, m, k, d)``: rows ``r < q`` the tested projections ``s_r``, the others the
     nuisance ones ``z_r``; ``base`` ``(d, d, k)``: ``W^T W`` (lower triangle read); ``kind``:
     0 ``t``, 1 ``F``, 2 Pillai's trace. ``H + E = base - sum_r z_r z_r^T``; a vertex whose
     ``H + E`` has a pivot at most ``floor`` gets 0 (as :func:`~.linear_model.statistic_of`).
     """
-    p, m, d, k = proj.shape
+    p, m, k, d = proj.shape
     for i in prange(m):
         chol = np.empty((d, d))
         solved = np.empty(d)
@@ -70,7 +70,7 @@ def _maps_kernel(proj, q, base, floor, df_resid, kind, out):  # pragma: no cover
                 for b in range(a + 1):
                     value = base[a, b, v]
                     for r in range(q, p):
-                        value -= proj[r, i, a, v] * proj[r, i, b, v]
+                        value -= proj[r, i, v, a] * proj[r, i, v, b]
                     chol[a, b] = value
             if kind != 2:
                 total = chol[0, 0]
@@ -79,10 +79,10 @@ def _maps_kernel(proj, q, base, floor, df_resid, kind, out):  # pragma: no cover
                     continue
                 hyp = 0.0
                 for r in range(q):
-                    hyp += proj[r, i, 0, v] ** 2
+                    hyp += proj[r, i, v, 0] ** 2
                 scale = max(total - hyp, 1e-300) / df_resid
                 if kind == 0:
-                    out[i, v] = proj[0, i, 0, v] / np.sqrt(scale)
+                    out[i, v] = proj[0, i, v, 0] / np.sqrt(scale)
                 else:
                     out[i, v] = hyp / q / scale
                 continue
@@ -106,7 +106,7 @@ def _maps_kernel(proj, q, base, floor, df_resid, kind, out):  # pragma: no cover
             trace = 0.0
             for r in range(q):
                 for a in range(d):
-                    value = proj[r, i, a, v]
+                    value = proj[r, i, v, a]
                     for c in range(a):
                         value -= chol[a, c] * solved[c]
                     solved[a] = value / chol[a, a]
@@ -167,9 +167,10 @@ class NullMaps:
         self.df_resid, self.method = n - x.shape[1], method
         self.kind = ("t" if self.q == 1 else "F") if scalar else "pillai"
         u_z, u_x = contrast_bases(x, c)
-        flat = y.transpose(0, 2, 1).reshape(n, d * k)  # columns component-major
-        w = flat - u_z @ (u_z.T @ flat)
-        total = np.einsum("nik,njk->kij", w.reshape(n, d, k), w.reshape(n, d, k))
+        flat = y.reshape(n, k * d)  # a view: columns vertex-major
+        w = u_z @ (u_z.T @ flat)
+        w = np.subtract(flat, w, out=w)  # R_z, in place of the fit (one array of the data's size)
+        total = np.einsum("nki,nkj->kij", w.reshape(n, k, d), w.reshape(n, k, d), optimize=True)
         self.entries, self.floor, shift = scatter_entries(total, 0.0 if scalar else ridge)
         self.u_z, self.u_x = u_z, u_x
         if method == "manly":
@@ -177,18 +178,18 @@ class NullMaps:
             if np.linalg.norm(ones - u_z @ (u_z.T @ ones)) < 1e-8:
                 flat = flat - flat.mean(axis=0)  # the intercept is nuisance: no change
             w = flat
-            wk = flat.reshape(n, d, k)
-            gram = np.einsum("nik,njk->kij", wk, wk)
+            wk = flat.reshape(n, k, d)
+            gram = np.einsum("nki,nkj->kij", wk, wk, optimize=True)
             self.entries = [
                 [gram[:, i, j] + (shift if i == j else 0.0) for j in range(d)] for i in range(d)
             ]
         self.w = w
         fixed, moving = split_invariant(u_z, invariant_directions(n, blocks))
-        constant = (fixed.T @ w).reshape(-1, d, k)  # the same for every permutation
+        constant = (fixed.T @ w).reshape(-1, k, d)  # the same for every permutation
         self.base = np.empty((d, d, k))
         for i in range(d):
             for j in range(i + 1):
-                self.base[i, j] = self.entries[i][j] - (constant[:, i] * constant[:, j]).sum(0)
+                self.base[i, j] = self.entries[i][j] - (constant[..., i] * constant[..., j]).sum(0)
         self.basis = np.vstack([u_x.T, moving.T])  # (p, n): tested rows first
         self.basis_t = np.ascontiguousarray(self.basis.T)
         self._buffers: dict[str, np.ndarray] = {}
@@ -214,9 +215,9 @@ class NullMaps:
         m, d, k = perm.shape[0], self.d, self.k
         gathered = self._buffer("gathered", rows * m * n).reshape(rows * m, n)
         _gather(self.basis_t, perm, gathered.reshape(rows, m, n))
-        proj = self._buffer("proj", rows * m * d * k).reshape(rows * m, d * k)
+        proj = self._buffer("proj", rows * m * k * d).reshape(rows * m, k * d)
         np.matmul(gathered, self.w, out=proj)
-        proj = proj.reshape(rows, m, d, k)
+        proj = proj.reshape(rows, m, k, d)
         out = np.empty((m, k))
         _maps_kernel(proj, self.q, self.base, self.floor, float(self.df_resid),
                      KIND_CODES[self.kind], out)  # fmt: skip
@@ -226,10 +227,10 @@ class NullMaps:
         """The tested part of the design permuted, ``Z`` kept: its own projections."""
         m, q, d, k = perm.shape[0], self.q, self.d, self.k
         moved = self.u_x[perm]  # (m, n, q)
-        raw = (moved.transpose(0, 2, 1).reshape(m * q, -1) @ self.w).reshape(m, q, d, k)
+        raw = (moved.transpose(0, 2, 1).reshape(m * q, -1) @ self.w).reshape(m, q, k, d)
         overlap = np.einsum("nz,mnq->mzq", self.u_z, moved)
         gram = np.eye(q) - np.einsum("mzq,mzr->mqr", overlap, overlap)
         inv_chol = np.linalg.inv(np.linalg.cholesky(gram))
-        proj = np.einsum("mqr,mrdk->mqdk", inv_chol, raw)
+        proj = np.einsum("mqr,mrkd->mqdk", inv_chol, raw)
         sx = [[proj[:, r, i] for i in range(d)] for r in range(q)]
         return statistic_of(sx, self.entries, self.df_resid, self.scalar, self.floor)
