@@ -18,6 +18,8 @@ SPD matrices as on LDDMM momenta; the group tests and the linear model take arra
 - :mod:`.permutation_glm`: :func:`glm_test` (Freedman-Lane, Manly or Draper-Stoneman
   permutations, within blocks, family-wise error of the maximum, optional enhancement),
   :func:`permutation_indices`, :func:`two_sided`, :func:`tfce_from_observed`;
+- :mod:`.null_maps`: the statistic maps of chunks of permutations (one matrix product,
+  closed-form per-vertex algebra compiled), which :func:`glm_test` runs;
 - :mod:`.survival`: :func:`cross_validated_c_index` and
   :func:`cross_validated_c_index_from_motion` (Cox regression, lifelines; cross-validated
   C-index with a bootstrap interval), :func:`c_index`, :func:`simulate_survival`;

@@ -22,7 +22,8 @@ on ``P R_z``: with an orthonormal basis ``[U_x, U_z]`` of the design split by th
 contrast, each permutation needs the ``p`` projections ``[U_x, U_z]^T P R_z`` at all
 the vertices, one matrix product for a chunk of permutations; then ``H`` is the
 scatter of the ``U_x`` projections and ``H + E = R_z^T R_z`` minus that of the
-``U_z`` projections.
+``U_z`` projections (:class:`~.null_maps.NullMaps`: the product, and the statistic per
+permutation and vertex compiled).
 
 ``blocks`` restricts the permutations to exchangeability blocks (e.g. sites);
 ``enhance`` maps statistic maps to enhanced ones (e.g. threshold-free cluster
@@ -32,6 +33,7 @@ enhancement) and the family-wise error is then also computed on the enhanced map
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -161,6 +163,17 @@ def permutation_chunks(n_subjects: int, n_permutations: int, rng: np.random.Gene
         chunk = parts[-1] if len(parts) == 2 and not len(pending) else np.concatenate(parts)
         pending = chunk[size:]
         yield chunk[:size]
+
+
+def _prefetched(items: Iterator) -> Iterator:
+    """The items of ``items``, each next one made in a worker thread while the caller uses
+    the current one (the permutations are drawn on one core while the maps of the previous
+    chunk use the others); the items and their order are those of ``items``."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        future = pool.submit(next, items, None)
+        while (item := future.result()) is not None:
+            future = pool.submit(next, items, None)
+            yield item
 
 
 def two_sided(enhance: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
@@ -297,7 +310,9 @@ def glm_test(
         draw = max(1, _DRAW_BYTES // (8 * k * (x.shape[1] * d + d * d + 8)))
     max_null = np.empty(n_permutations)
     max_enhanced = None if enhance is None else np.empty(n_permutations)
-    chunks = permutation_chunks(y.shape[0], n_permutations, rng, blocks, int(chunk_size), draw)
+    chunks = _prefetched(
+        permutation_chunks(y.shape[0], n_permutations, rng, blocks, int(chunk_size), draw)
+    )
     total = -(-n_permutations // int(chunk_size))
     start = 0
     for perm in tqdm(chunks, total=total, desc="permutations", disable=not progress, leave=False):
