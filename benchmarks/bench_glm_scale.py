@@ -95,6 +95,12 @@ def make_data(n: int, dim: int, vertices, faces, rng: np.random.Generator):
     return table, (data[..., 0] if dim == 1 else data), adjacency
 
 
+def _cpu_seconds() -> float:
+    """User and system CPU time of this process (every thread), seconds."""
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    return usage.ru_utime + usage.ru_stime
+
+
 def run_case(case: str, n: int, permutations: int) -> dict:
     """One case in this process: seconds of ``glm_test``, peak RSS, load before."""
     from ladders.statistics import design_matrix, glm_test
@@ -118,15 +124,16 @@ def run_case(case: str, n: int, permutations: int) -> dict:
     test = glm_test(data, design, CONTRAST, 1, np.random.default_rng(1),
                     tfce=adjacency if tfce else None)  # fmt: skip
     setup = time.perf_counter() - start
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), _cpu_seconds()
     test = glm_test(data, design, CONTRAST, permutations, np.random.default_rng(1),
                     tfce=adjacency if tfce else None)  # fmt: skip
-    seconds = time.perf_counter() - start
+    seconds, cpu = time.perf_counter() - start, _cpu_seconds() - cpu
     if permutations < PERMUTATIONS:
         seconds = setup + (seconds - setup) * PERMUTATIONS / permutations
+        cpu *= PERMUTATIONS / permutations
     return {
         "case": case, "subjects": n, "vertices": len(vertices), "permutations": permutations,
-        "seconds": seconds, "setup": setup, "load": load,
+        "seconds": seconds, "cpu": cpu, "setup": setup, "load": load,
         "data_gb": data_gb, "rss_gb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20,
         "p_min": float(test.p_fwer.min()),
     }  # fmt: skip
@@ -142,7 +149,8 @@ def measure(case: str, n: int, permutations: int) -> dict:
 
 
 def cell(results: list[dict]) -> str:
-    """``a / b / c s`` over the sizes (``~`` marks an extrapolation), growth and RSS."""
+    """``a / b / c s`` over the sizes (``~`` marks an extrapolation), the growth of the last
+    step, and at the largest size the CPU time (every thread) and the peak RSS."""
     times = " / ".join(("~" if r["permutations"] < PERMUTATIONS else "") + f"{r['seconds']:.3g}"
                        for r in results)  # fmt: skip
     last, before = results[-1], results[-2] if len(results) > 1 else None
@@ -150,7 +158,7 @@ def cell(results: list[dict]) -> str:
     if before is not None:
         ratio = last["seconds"] / before["seconds"]
         growth = f" (x{ratio:.1f} for x{last['subjects'] / before['subjects']:g} subjects)"
-    return f"{times} s{growth}; {last['rss_gb']:.2f} GB"
+    return f"{times} s{growth}; CPU {last['cpu']:.3g} s; {last['rss_gb']:.2f} GB"
 
 
 def main(argv=None) -> None:
@@ -181,7 +189,8 @@ def main(argv=None) -> None:
             permutations = PERMUTATIONS if n < max(args.sizes) else args.permutations
             r = measure(case, n, permutations)
             note = "" if permutations == PERMUTATIONS else f" (extrapolated from {permutations})"
-            print(f"{CASES[case][2]}, {n:,} subjects: {r['seconds']:.1f} s{note} "
+            print(f"{CASES[case][2]}, {n:,} subjects: {r['seconds']:.1f} s{note}, "
+                  f"CPU {r['cpu']:.1f} s "
                   f"(setup {r['setup']:.1f} s), peak RSS {r['rss_gb']:.2f} GB "
                   f"({r['data_gb']:.2f} GB with the data made), "
                   f"load {r['load']:.2f}", flush=True)  # fmt: skip
@@ -194,7 +203,8 @@ def main(argv=None) -> None:
     met.append(f"memory {peak:.2f} GB " + ("met" if peak <= TARGET_GB else "NOT met"))
     loads = [r["load"] for rs in results.values() for r in rs]
     sizes = " / ".join(f"{n:,}" for n in sorted(args.sizes))
-    header = ["load", *(f"{CASES[c][2]}: s at {sizes} subjects; peak RSS" for c in results),
+    header = ["load", *(f"{CASES[c][2]}: s at {sizes} subjects; CPU s, peak RSS at the last"
+                        for c in results),
               f"targets at {max(args.sizes):,} subjects (60 s, 4 GB)"]  # fmt: skip
     row = {header[0]: f"{min(loads):.2f}-{max(loads):.2f}",
            **{h: cell(results[c]) for h, c in zip(header[1:], results)},

@@ -170,7 +170,7 @@ class NullMaps:
         flat = y.reshape(n, k * d)  # a view: columns vertex-major
         w = u_z @ (u_z.T @ flat)
         w = np.subtract(flat, w, out=w)  # R_z, in place of the fit (one array of the data's size)
-        total = np.einsum("nki,nkj->kij", w.reshape(n, k, d), w.reshape(n, k, d), optimize=True)
+        total = np.einsum("nki,nkj->kij", w.reshape(n, k, d), w.reshape(n, k, d))
         self.entries, self.floor, shift = scatter_entries(total, 0.0 if scalar else ridge)
         self.u_z, self.u_x = u_z, u_x
         if method == "manly":
@@ -179,7 +179,7 @@ class NullMaps:
                 flat = flat - flat.mean(axis=0)  # the intercept is nuisance: no change
             w = flat
             wk = flat.reshape(n, k, d)
-            gram = np.einsum("nki,nkj->kij", wk, wk, optimize=True)
+            gram = np.einsum("nki,nkj->kij", wk, wk)
             self.entries = [
                 [gram[:, i, j] + (shift if i == j else 0.0) for j in range(d)] for i in range(d)
             ]
