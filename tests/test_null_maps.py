@@ -9,10 +9,10 @@ from ladders.statistics import (
     design_matrix,
     fit_statistic,
     glm_test,
+    permutation_chunks,
     permutation_indices,
 )
 from ladders.statistics.null_maps import NullMaps
-from ladders.statistics.permutation_glm import permutation_chunks
 
 
 def _cohort(n: int, rng: np.random.Generator):

@@ -143,12 +143,26 @@ def permutation_indices(
 
 def permutation_chunks(n_subjects: int, n_permutations: int, rng: np.random.Generator, blocks,
                        size: int, draw: int) -> Iterator[np.ndarray]:  # fmt: skip
-    """The permutations of :func:`permutation_indices` in chunks ``(size, n)`` (the last
-    shorter), drawn from ``rng`` ``draw`` at a time.
+    """The permutations of :func:`permutation_indices` in chunks, drawn ``draw`` at a time.
 
     Within blocks the random stream depends on how many permutations are drawn at once,
     so the draws keep their own size: a seed gives the same permutations whatever
-    ``size``. (Without blocks the rows are drawn one after the other anyway.)
+    ``size`` (without blocks the rows are drawn one after the other anyway).
+
+    Parameters
+    ----------
+    n_subjects, n_permutations : int
+    rng : numpy.random.Generator
+    blocks : array, shape (n,), or None
+        Exchangeability-block labels.
+    size : int
+        Permutations per chunk (the last chunk may be shorter).
+    draw : int
+        Permutations per call of :func:`permutation_indices` (ignored without blocks).
+
+    Yields
+    ------
+    ndarray of int, shape (size, n)
     """
     if blocks is None:
         draw = size
