@@ -16,19 +16,26 @@ from .cli_types import (
     UsageError,
     existing_file,
     existing_folder,
-    nonnegative_int,
-    output_folder,
     positive_float,
     positive_int,
+)
+from .common_arguments import (
+    RECOMMENDED_ALPHA2,
+    add_alpha2,
+    add_compare,
+    add_no_progress,
+    add_output,
+    add_permutations,
+    add_seed,
 )
 
 __all__ = ["add_analyze_parser", "run_analyze_command"]
 
 
-def _pair(text: str) -> tuple[str, str]:
+def _columns(text: str) -> tuple[str, str]:
     names = tuple(t.strip() for t in text.split(","))
     if len(names) != 2 or not all(names):
-        raise argparse.ArgumentTypeError(f"expected two group names as A,B, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected two column names as TIME,EVENT, got {text!r}")
     return names
 
 
@@ -66,7 +73,7 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--blocks", default=None, metavar="COLUMN",
                    help="a design column of exchangeability blocks (e.g. site): permutations "
                         "within blocks")  # fmt: skip
-    p.add_argument("--outcome", type=_pair, default=None, metavar="TIME,EVENT",
+    p.add_argument("--outcome", type=_columns, default=None, metavar="TIME,EVENT",
                    help="design columns of a survival outcome (follow-up time, event 1 or "
                         "censored 0): Cox regression on the motion's PCA scores, cross-validated "
                         "C-index per motion")  # fmt: skip
@@ -83,18 +90,18 @@ def add_analyze_parser(sub) -> None:
                    help="with the linear model (--design, --tfce or --aha): smooth every "
                         "subject's maps on the atlas before the tests, by the heat kernel of "
                         "this full width at half maximum (mm)")  # fmt: skip
-    p.add_argument("--compare", type=_pair, default=None, metavar="A,B",
-                   help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
+    add_compare(p)
     p.add_argument("--truth", type=existing_file, default=None,
                    help="planted_region.json of a synthetic cohort ('symladders cohort')")  # fmt: skip
     p.add_argument("--null", type=existing_folder, default=None, metavar="NULL_STUDY",
                    help="study of the same subjects without the effect (with --truth)")  # fmt: skip
-    p.add_argument("--alpha2", type=positive_float, nargs="+", default=None,
-                   help="alpha^2 values to analyse (default: all of the study)")  # fmt: skip
+    add_alpha2(p, None, "alpha^2 values to analyse (default: every one of the study); the "
+                        "main motion (the terminal's line, the figures) is the pole ladder with "
+                        f"residuals at the study's alpha^2 nearest {RECOMMENDED_ALPHA2:g}, the "
+                        "value for group statistics (docs/population.md)")  # fmt: skip
     p.add_argument("--transport", nargs="+", default=None,
                    help="transport methods to analyse, e.g. pole_ladder_residual fanning none")  # fmt: skip
-    p.add_argument("--permutations", type=positive_int, default=10000,
-                   help="permutations of the group labels per test")  # fmt: skip
+    add_permutations(p)
     p.add_argument("--components", type=positive_int, default=5,
                    help="PCA scores of the global test and the classifier")  # fmt: skip
     p.add_argument("--normalize", choices=("none", "volume"), default="none",
@@ -103,11 +110,10 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--alpha", type=positive_float, default=0.05, help="family-wise error level")
     p.add_argument("--null-repetitions", type=positive_int, default=200,
                    help="random splits of the null study")  # fmt: skip
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every random draw")
-    p.add_argument("--output", "-o", type=output_folder, default=None,
-                   help="analysis folder (default STUDY_OUTPUT/analysis)")  # fmt: skip
+    add_seed(p)
+    add_output(p, None, "analysis folder (default: STUDY_OUTPUT/analysis)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_no_progress(p)
     p.set_defaults(run=run_analyze_command, output_is_file=False)
 
 

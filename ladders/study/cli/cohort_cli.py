@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import argparse
 
-from .cli_types import DefaultsFormatter, UsageError, nonnegative_int, output_folder, positive_int
+from .cli_types import DefaultsFormatter, UsageError, positive_int
 from .cohort_cycle_cli import ED_ES_DEFAULTS, add_cycle_arguments, run_cycle_cohort
+from .common_arguments import MESH_FORMATS, add_no_progress, add_output, add_seed
 
 __all__ = ["add_cohort_parser", "run_cohort_command"]
 
@@ -123,8 +124,7 @@ def add_cohort_parser(sub) -> None:
         ),
         formatter_class=DefaultsFormatter,
     )
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/cohort",
-                   help="folder to write")  # fmt: skip
+    add_output(p, "symladders-output/cohort", "folder to write")
     p.add_argument("--subjects", type=positive_int, default=40, help="number of subjects")
     p.add_argument("--patients", type=_fraction, default=0.5,
                    help="fraction of the subjects in the patients' group")  # fmt: skip
@@ -183,8 +183,9 @@ def add_cohort_parser(sub) -> None:
     g.add_argument("--design", action="store_true",
                    help="write design.csv with the default covariates even without the options above")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
-    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"),
+    add_seed(p)
+    add_no_progress(p)
+    p.add_argument("--ext", choices=MESH_FORMATS,
                    default=ED_ES_DEFAULTS["ext"],
                    help="mesh format")  # fmt: skip
     add_cycle_arguments(p)
@@ -236,10 +237,13 @@ def _run_covariate_cohort(args, abnormality) -> int:
                                      args.noise, args.noise_length)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
-    folder = write_covariate_cohort(
-        data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
-        pose=args.pose, landmarks=args.landmarks,
-    )  # fmt: skip
+    if args.images == "labels":
+        folder = _write_images(data, args)
+    else:
+        folder = write_covariate_cohort(
+            data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
+            pose=args.pose, landmarks=args.landmarks,
+        )  # fmt: skip
     counts = ", ".join(f"{g.name} {sum(v == g.name for v in data.groups.values())}" for g in groups)
     print(f"symladders cohort: {len(data.cohort)} subjects ({counts}), "
           f"{data.cohort.n_vertices} vertices, in {folder}")  # fmt: skip
@@ -249,9 +253,39 @@ def _run_covariate_cohort(args, abnormality) -> int:
             f"{g.abnormality.describe()} ({int(region.affected.sum())} atlas vertices)"]  # fmt: skip
         planted += [] if g.anatomy is None else [f"anatomy {g.anatomy}"]
         print(f"  {g.name}: {'; '.join(planted) or 'no planted effect'}")
-    print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
-          f"truth: {folder / 'planted_region.json'}")  # fmt: skip
+    if args.images == "labels":
+        _print_images(folder)
+    else:
+        print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
+              f"truth: {folder / 'planted_region.json'}")  # fmt: skip
     return 0
+
+
+def _check_image_options(args) -> None:
+    """``--images labels`` without ``--cycle``: the options that only shape meshes are refused."""
+    for flag, value in (("--remesh", args.remesh), ("--pose", args.pose),
+                        ("--landmarks", args.landmarks)):  # fmt: skip
+        if value:
+            raise UsageError(f"symladders cohort: error: {flag}: not with --images labels (the "
+                             "images are meshed by 'symladders run'; the landmarks come from the "
+                             "right ventricle's label)")  # fmt: skip
+
+
+def _write_images(data, args):
+    """The cohort as label images with subjects.csv and study.toml (``--images labels``)."""
+    from pathlib import Path
+
+    from ..population.image_cohort import write_image_cohort
+
+    voxel = args.voxel or (1.5, 1.5)
+    return write_image_cohort(data, Path(args.output), spacing=voxel[0], thickness=voxel[1])
+
+
+def _print_images(folder) -> None:
+    print(f"label images: {folder / 'images'} (1 blood pool, 3 right ventricle); subjects: "
+          f"{folder / 'subjects.csv'}; settings: {folder / 'study.toml'}; truth: "
+          f"{folder / 'planted_region.json'}")  # fmt: skip
+    print(f"next: symladders run {folder / 'study.toml'}")
 
 
 def run_cohort_command(args) -> int:
@@ -272,12 +306,22 @@ def run_cohort_command(args) -> int:
         raise UsageError(f"symladders cohort: error: {exc}") from None
     if args.cycle is not None:
         return run_cycle_cohort(args, abnormality)
+    if args.images == "cine" or args.tagging:
+        raise UsageError("symladders cohort: error: --images cine and --tagging: only with --cycle")
+    if args.images == "labels":
+        _check_image_options(args)
     if _several_groups(args):
         return _run_covariate_cohort(args, abnormality)
     data = make_two_group_cohort(
         args.subjects, args.patients, abnormality, args.vertices, args.seed, args.noise,
         args.noise_length,
     )  # fmt: skip
+    if args.images == "labels":
+        folder = _write_images(data, args)
+        print(f"symladders cohort: {len(data.cohort)} subjects ({int(data.labels.sum())} "
+              f"patients) as label images, in {folder}")  # fmt: skip
+        _print_images(folder)
+        return 0
     folder = write_two_group_cohort(
         data,
         Path(args.output),

@@ -11,16 +11,19 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..sequences.cycle_analysis import MEASURES, MOTION_MEASURES
 from .cli_types import (
     DefaultsFormatter,
     UsageError,
     existing_file,
     existing_folder,
-    jobs_count,
     output_folder,
     positive_float,
     positive_int,
 )
+from .common_arguments import RECOMMENDED_ALPHA2, add_batch_arguments, add_output, parallel_backend
+from .plugin_arguments import add_plugin_argument, one_deformation, registered_names
+from .preparation_arguments import mesh_file
 
 __all__ = ["add_cycle_parsers", "run_cycle_study_command", "run_cycle_analyze_command"]
 
@@ -44,16 +47,20 @@ def add_cycle_parsers(sub) -> None:
     )
     p.add_argument("frames", type=existing_folder, metavar="FRAMES",
                    help="folder of <subject>/frame_<kk>.<ext> meshes")  # fmt: skip
-    p.add_argument("--atlas", type=existing_file, required=True,
+    p.add_argument("--atlas", type=mesh_file, required=True,
                    help="the atlas mesh (the frames' vertex correspondence)")  # fmt: skip
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/cycle_study",
-                   help="the study's folder")  # fmt: skip
-    p.add_argument("--alpha2", type=positive_float, default=1.0,
-                   help="the regularisation alpha^2 of the registrations (eq. 3)")  # fmt: skip
-    p.add_argument("--deformation", choices=("lddmm", "svf"), default="lddmm")
+    add_output(p, "symladders-output/cycle_study", "the study's folder")
+    p.add_argument("--alpha2", type=positive_float, default=RECOMMENDED_ALPHA2, metavar="A",
+                   help="the regularisation alpha^2 of the registrations (eq. 3): one value, the "
+                        "one for group statistics (docs/population.md, 'Which to use when': "
+                        "never an LDDMM transport at small alpha^2)")  # fmt: skip
+    p.add_argument("--deformation", type=one_deformation, default="lddmm", metavar="NAME",
+                   help="deformation model of the registrations and the pole ladder, a "
+                        "registered name (" + ", ".join(registered_names())
+                   + "; a model of your own: --plugin)")  # fmt: skip
+    add_plugin_argument(p)
     p.add_argument("--sigma", type=positive_float, default=10.0, help="kernel width (mm)")
-    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects in parallel")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_batch_arguments(p)
     p.set_defaults(run=run_cycle_study_command, output_is_file=False)
 
     q = sub.add_parser(
@@ -62,7 +69,9 @@ def add_cycle_parsers(sub) -> None:
         description=(
             "Test two groups' transported cycles (STUDY, the output of 'symladders "
             "cycle-study') on the normal motion (or, with --measure rotation, the rotation "
-            "about the long axis) at every vertex: per frame (FWER over the "
+            "about the long axis), or their wall maps (STUDY, the output of 'symladders "
+            "wall', with --measure thickness, thickening, radial, circumferential or "
+            "longitudinal) at every vertex: per frame (FWER over the "
             "vertices and frames together), and on each vertex's peak and its "
             "time in the cycle (FWER over the vertices), by permutation. OUTPUT holds "
             "cycle_vertices.csv, cycle_frames.csv, cycle_tests.vtu and cycle_curves.png."
@@ -79,10 +88,12 @@ def add_cycle_parsers(sub) -> None:
     q.add_argument("--tfce", action="store_true",
                    help="also test the peak with threshold-free cluster enhancement on the "
                         "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
-    q.add_argument("--measure", choices=("normal", "rotation"), default="normal",
+    q.add_argument("--measure", choices=tuple(MEASURES), default="normal",
                    help="the curve tested per vertex: the normal motion (mm), or the rotation "
                         "about the long axis (degrees, counter-clockwise seen from the apex; "
-                        "what a twist changes; needs --aha)")  # fmt: skip
+                        "what a twist changes; needs --aha), of a cycle study; or, of the maps "
+                        "of 'symladders wall', the wall thickness or thickening (mm) or the "
+                        "radial, circumferential or longitudinal strain (percent)")  # fmt: skip
     q.add_argument("--min-radius", type=positive_float, default=5.0,
                    help="with --measure rotation: vertices closer to the long axis than this "
                         "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
@@ -111,9 +122,10 @@ def run_cycle_study_command(args) -> int:
     sequences = read_tracked_frames(args.frames)
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
     try:
-        outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
-                                  deformation=args.deformation, jobs=args.jobs,
-                                  progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
+        with parallel_backend(args, "cycle-study"):
+            outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
+                                      deformation=args.deformation, jobs=args.jobs,
+                                      progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
     except ValueError as exc:  # a bad atlas
         raise UsageError(f"symladders cycle-study: error: {exc}") from None
     print(
@@ -192,12 +204,15 @@ def run_cycle_analyze_command(args) -> int:
     from ..sequences import compare_cycles, load_cycle_motion
     from ..sequences.cycle_outputs import write_cycle_tests
 
-    motion = load_cycle_motion(args.study)
+    if args.measure in MOTION_MEASURES:
+        motion = load_cycle_motion(args.study)
+    else:  # the wall's measures: the maps of 'symladders wall'
+        from ..wall import load_wall_cycles
+
+        motion = load_wall_cycles(args.study)
     labels, names = _two_groups(read_groups(args.groups), args.compare, motion.subjects)
     if len(labels) < len(motion.subjects):  # subjects of other groups left out
-        keep = [i for i, s in enumerate(motion.subjects) if s in labels]
-        motion = type(motion)(tuple(motion.subjects[i] for i in keep),
-                              motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
+        motion = motion.subset([s for s in motion.subjects if s in labels])
     axis = _landmarks(args)
     tested = _tested_segments(args, motion, axis)
     try:

@@ -4,7 +4,8 @@ Subcommands: ``study``, ``mesh`` (label images to meshes), ``correspond`` and ``
 a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
 groups with a planted abnormality), ``analyze`` (group statistics of a study's
 transported motion), ``validate``, ``track`` (corresponded ED meshes through label or cine
-series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested).
+series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested),
+``wall`` (wall thickness, thickening and strain of tracked subjects).
 """
 
 from __future__ import annotations
@@ -30,9 +31,12 @@ from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
 from .cycle_cli import add_cycle_parsers
 from .mesh_cli import add_mesh_parser
+from .plugin_arguments import preload_plugins
+from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
+from .wall_cli import add_wall_parser
 
 __all__ = ["main", "build_parser"]
 
@@ -44,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    add_run_parser(sub)
     add_study_parser(sub)
     add_mesh_parser(sub)
     add_correspond_parser(sub)
@@ -53,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_validate_parser(sub)
     add_track_parser(sub)
     add_cycle_parsers(sub)
+    add_wall_parser(sub)
     return parser
 
 
@@ -64,22 +70,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     standard error without a traceback; 3 for an internal error, reported as
     one line saying where the full traceback was written; 130 if interrupted.
     """
+    from ladders.tables import TableError
     from manifolds.errors import ManifoldError
 
     from ..errors import CohortError
 
-    parser = build_parser()
     command = "symladders"
     args = None
     try:
-        args = parser.parse_args(argv)
+        preload_plugins(sys.argv[1:] if argv is None else argv)
+        args = build_parser().parse_args(argv)
         command = f"symladders {args.command}"
         return args.run(args)
     except BrokenPipeError:
         return _closed_pipe()
     except UsageError as exc:
         return _fail(str(exc), EXIT_USAGE)
-    except (CohortError, ManifoldError) as exc:
+    except (CohortError, ManifoldError, TableError) as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)
     except OSError as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)

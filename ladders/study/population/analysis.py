@@ -16,10 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ladders.tables import locate
 from manifolds.validation import check_int
 
 from ..cohort.planted_effect import PlantedRegion
 from ..errors import CohortError
+from ..recommendations import main_motion
 from .against_truth import TransportScore, score_transports
 from .analysis_outputs import write_analysis
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups
@@ -81,8 +83,9 @@ def check_groups_table(
     if absent:
         shown = ", ".join(absent[:5]) + (" ..." if len(absent) > 5 else "")
         raise CohortError(
-            f"groups: {len(absent)} subject(s) of the table are not in the study (no result at "
-            f"every alpha^2): {shown}"
+            f"{locate(groups, 'subject', absent[0], 'groups')}: unknown subject {absent[0]!r}: "
+            f"{len(absent)} subject(s) of the table are not in the study (no result at every "
+            f"alpha^2): {shown}"
         )
     present = list(dict.fromkeys(groups.values()))
     if compare is None:
@@ -145,16 +148,6 @@ def read_planted_region(path) -> PlantedRegion:
     if region is None:
         raise CohortError(f"truth {path}: the cohort has no planted abnormality (a null cohort)")
     return PlantedRegion.from_dict(region)
-
-
-def _main(comparisons: list[GroupComparison]) -> GroupComparison:
-    """The pole ladder with residuals at the alpha^2 nearest 1 (else the first motion)."""
-    ladders = [c for c in comparisons if c.motion.method == "pole_ladder_residual"]
-    if not ladders:
-        return comparisons[0]
-    return min(
-        ladders, key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2)))
-    )
 
 
 def analyze(
@@ -235,7 +228,7 @@ def analyze(
             )  # fmt: skip
             for m in motions
         ]
-    main = _main(comparisons)
+    main = main_motion(comparisons)
     truth = (
         None
         if region is None

@@ -25,15 +25,18 @@ from pathlib import Path
 import numpy as np
 
 from ladders.statistics import contrast_matrix, design_matrix
+from ladders.tables import locate
 from manifolds.validation import check_int
 
 from ..errors import CohortError
 from ..files import atomic_write_text
 from ..meshes.mesh_outputs import write_point_mesh
+from ..recommendations import main_motion
 from .aha_model import AHA_NAMES, aha_segments
 from .analysis import select_motions
 from .group_comparison import normalize_motion
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model
+from .model_figures import plot_model_map
 from .transported_motion import load_transported_motion
 
 __all__ = ["ModelOutcome", "check_design_table", "analyze_model", "main_comparison"]
@@ -66,8 +69,9 @@ def check_design_table(table: dict, subjects: list[str]) -> tuple[list[str], lis
     unknown = [s for s in listed if s not in set(subjects)]
     if unknown:
         raise CohortError(
-            f"design: subject(s) {', '.join(unknown)} not in the study (it has "
-            f"{len(subjects)} subjects with results)"
+            f"{locate(table, 'subject', unknown[0], 'design')}: unknown subject {unknown[0]!r}: "
+            f"subject(s) {', '.join(unknown)} not in the study (it has {len(subjects)} subjects "
+            "with results)"
         )
     kept = [s for s in subjects if s in set(listed)]
     left_out = [s for s in subjects if s not in set(listed)]
@@ -77,20 +81,12 @@ def check_design_table(table: dict, subjects: list[str]) -> tuple[list[str], lis
 
 
 def main_comparison(comparisons: list[ModelComparison]) -> list[ModelComparison]:
-    """Per contrast, the pole ladder with residuals at the alpha^2 nearest 1 (else the first)."""
-    out = []
-    for name in dict.fromkeys(c.contrast for c in comparisons):
-        same = [c for c in comparisons if c.contrast == name]
-        ladders = [c for c in same if c.motion.method == "pole_ladder_residual"]
-        out.append(
-            min(
-                ladders,
-                key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2))),
-            )  # fmt: skip
-            if ladders
-            else same[0]
-        )
-    return out
+    """Per contrast, the main motion (:func:`~ladders.study.recommendations.main_motion`: the
+    pole ladder with residuals at the alpha^2 nearest the recommended one, else the first)."""
+    return [
+        main_motion([c for c in comparisons if c.contrast == name])
+        for name in dict.fromkeys(c.contrast for c in comparisons)
+    ]
 
 
 def _slug(text: str) -> str:
@@ -364,8 +360,11 @@ def analyze_model(
         paths[name] = folder / name
     write_model_maps(comparisons, folder / "maps", alpha)
     paths["maps"] = folder / "maps"
-    if figures and segments is not None:
+    if figures:
         for c in main:
-            name = f"fig_bullseye_{_slug(c.contrast)}.png"
-            paths[name] = _bullseyes(c, folder / name, alpha)
+            name = f"fig_model_map_{_slug(c.contrast)}.png"
+            paths[name] = plot_model_map(c, folder / name, alpha)
+            if segments is not None:
+                name = f"fig_bullseye_{_slug(c.contrast)}.png"
+                paths[name] = _bullseyes(c, folder / name, alpha)
     return ModelOutcome(comparisons, main, paths, left_out)

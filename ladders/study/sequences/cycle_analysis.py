@@ -22,6 +22,12 @@ labels and the permutations stay exact), ``s = sign(m_t*)`` at the frame of larg
 ``|m_t|``, and the peak is ``s max_t (s r_t)`` (signed degrees) with its time. Vertices
 closer to the axis than ``min_radius`` (the apical cap) are not tested.
 
+With a wall measure (``thickness``, ``thickening``, ``radial``, ``circumferential``,
+``longitudinal``) the curves are a cohort's wall maps
+(:class:`~ladders.study.wall.WallCycles`, from ``symladders wall``) instead of its
+transported motion, and their peaks are taken in the sense the cohort moves, as the
+rotation's.
+
 With ``vertices`` only part of the atlas is tested (e.g. without the apical cap, AHA
 segment 17, which thick short-axis slices resolve poorly): the FWER is over those
 vertices, and the others have ``NaN`` statistics and p-values.
@@ -62,8 +68,14 @@ from .peaks import curve_peaks
 
 __all__ = ["CycleMotion", "CycleTests", "compare_cycles", "load_cycle_motion"]
 
-#: What a cycle test measures at each vertex and frame, and its unit.
-MEASURES = {"normal": "mm", "rotation": "deg"}
+#: What a cycle test measures at each vertex and frame, and its unit: the motion's, from a
+#: cycle study (:class:`CycleMotion`), and the wall's, from the wall maps of ``symladders
+#: wall`` (:class:`~ladders.study.wall.WallCycles`: thickness and thickening in mm, the
+#: radial, circumferential and longitudinal strain in percent).
+MEASURES = {"normal": "mm", "rotation": "deg", "thickness": "mm", "thickening": "mm",
+            "radial": "percent", "circumferential": "percent", "longitudinal": "percent"}  # fmt: skip
+#: The measures of a cycle study's transported motion (the others are the wall maps').
+MOTION_MEASURES = ("normal", "rotation")
 
 
 @dataclass(frozen=True)
@@ -83,6 +95,15 @@ class CycleMotion:
     displacement: np.ndarray
     atlas: np.ndarray
     faces: np.ndarray
+
+    def subset(self, subjects) -> CycleMotion:
+        """The motion of ``subjects`` (names of this motion's), in their order."""
+        index = {s: i for i, s in enumerate(self.subjects)}
+        missing = [s for s in subjects if s not in index]
+        if missing:
+            raise CohortError(f"subjects: {missing[0]!r} not in the cycle study")
+        rows = [index[s] for s in subjects]
+        return CycleMotion(tuple(subjects), self.displacement[rows], self.atlas, self.faces)
 
     @property
     def fractions(self) -> np.ndarray:
@@ -117,8 +138,10 @@ class CycleMotion:
         subject's map at every frame is smoothed on the atlas by the heat kernel of that
         full width at half maximum (:class:`~ladders.statistics.SurfaceSmoother`; the
         rotation over its vertices off the axis)."""
-        if measure not in MEASURES:
-            raise ValueError(f"measure: expected one of {sorted(MEASURES)}, got {measure!r}")
+        if measure not in MOTION_MEASURES:
+            raise ValueError(f"measure: expected one of {list(MOTION_MEASURES)} of a cycle study, "
+                             f"got {measure!r}" + (" (a wall measure: test the maps of "
+                             "'symladders wall')" if measure in MEASURES else ""))  # fmt: skip
         if measure == "normal":
             curves = self.normal()
         else:
@@ -309,7 +332,9 @@ def compare_cycles(
 
     Parameters
     ----------
-    motion : CycleMotion
+    motion : CycleMotion or WallCycles
+        The curves tested (a wall measure needs the wall maps,
+        :func:`~ladders.study.wall.load_wall_cycles`).
     groups : array of bool, shape (n_subjects,), or dict ``{subject: bool}``
         True for the first group (e.g. the patients).
     n_permutations : int, default 5000
@@ -320,8 +345,11 @@ def compare_cycles(
     vertices : array of bool, shape (k,), optional
         The atlas's vertices tested (default all); TFCE runs on the triangles between
         them.
-    measure : {"normal", "rotation"}, default "normal"
-        The normal motion (mm) or the rotation about the long axis (degrees).
+    measure : str, default "normal"
+        One of :data:`MEASURES`: of a :class:`CycleMotion`, the normal motion (mm) or the
+        rotation about the long axis (degrees); of a :class:`~ladders.study.wall.WallCycles`
+        (``motion``), a wall measure (thickness, thickening, strains), whose peak is taken
+        in the sense its cohort moves, as the rotation's.
     axis : array (2, 3) or Landmarks, optional
         The atlas's apex and base-plane centre (rows), or its landmarks: required for
         the rotation.

@@ -4,7 +4,8 @@ Written by :func:`write_cycle_tests` into one folder:
 
 * ``cycle_vertices.csv``: per vertex, each group's mean peak inward motion (mm;
   ``peak_group1_mm``) or, with the rotation measure, signed peak rotation about the
-  long axis (degrees; ``peak_group1_deg``) and time to peak (fraction of the cycle),
+  long axis (degrees; ``peak_group1_deg``), or a wall measure's peak (mm or percent),
+  and time to peak (fraction of the cycle),
   their ``t`` and FWER-corrected p, the
   smallest per-frame p, and with the peak's TFCE test its enhanced map and FWER p
   (``peak_tfce``, ``peak_tfce_p_fwer``); when only some vertices were tested, a
@@ -12,19 +13,17 @@ Written by :func:`write_cycle_tests` into one folder:
 * ``cycle_frames.csv``: per frame, its fraction of the cycle, the vertices found at
   FWER 5 % (vertices and frames together) and the largest ``|t|``;
 * ``cycle_tests.vtu``: the atlas with those per-vertex columns as point data;
-* ``cycle_curves.png``: each group's mean curve (normal motion or rotation) through
+* ``cycle_curves.png``: each group's mean curve (the measure's) through
   the cycle, over the vertices whose peak differs (all vertices tested when none does).
 """
 
 from __future__ import annotations
 
-import csv
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..files import atomic_path, atomic_write_text
+from ..files import atomic_path, atomic_write_text, csv_text
 from ..meshes.mesh_outputs import write_point_mesh
 from .cycle_analysis import CycleMotion, CycleTests
 
@@ -52,14 +51,6 @@ def _vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     return columns
 
 
-def _csv(header, rows) -> str:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
-    return buf.getvalue()
-
-
 def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("group1", "group2"),
                       alpha: float = 0.05) -> list[Path]:  # fmt: skip
     """Write the analysis's files (see the module); return their paths.
@@ -79,17 +70,28 @@ def write_cycle_tests(folder, motion: CycleMotion, tests: CycleTests, names=("gr
     columns = _vertex_columns(tests)
     vertices = folder / "cycle_vertices.csv"
     rows = [[v, *(f"{columns[c][v]:.6g}" for c in columns)] for v in range(len(motion.atlas))]
-    atomic_write_text(vertices, _csv(["vertex", *columns], rows))
+    atomic_write_text(vertices, csv_text(["vertex", *columns], rows))
     frames = folder / "cycle_frames.csv"
     pf = tests.per_frame
     rows = [[t, f"{motion.fractions[t]:.4f}", int((pf.p_fwer[t] < alpha).sum()),
              f"{np.nanmax(np.abs(pf.statistic[t])):.4g}"] for t in range(pf.statistic.shape[0])]  # fmt: skip
-    atomic_write_text(frames, _csv(["frame", "fraction", f"vertices_p_fwer_below_{alpha:g}",
+    atomic_write_text(frames, csv_text(["frame", "fraction", f"vertices_p_fwer_below_{alpha:g}",
                                     "max_abs_t"], rows))  # fmt: skip
     vtu = write_point_mesh(folder / "cycle_tests.vtu", motion.atlas, motion.faces, columns)
     png = folder / "cycle_curves.png"
     _plot_curves(png, motion, tests, names, alpha)
     return [vertices, frames, vtu, png]
+
+
+_AXIS_LABELS = {
+    "normal": "normal motion (mm, inward < 0)",
+    "rotation": "rotation (deg, counter-clockwise from the apex > 0)",
+    "thickness": "wall thickness (mm)",
+    "thickening": "wall thickening from ED (mm)",
+    "radial": "radial strain (%)",
+    "circumferential": "circumferential strain (%)",
+    "longitudinal": "longitudinal strain (%)",
+}
 
 
 def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alpha: float) -> None:
@@ -112,8 +114,7 @@ def _plot_curves(path: Path, motion: CycleMotion, tests: CycleTests, names, alph
         ax.fill_between(x, mean - sd, mean + sd, color=colour, alpha=0.2, lw=0)
     what = (f"{int(found.sum())} vertices whose peak differs" if found.any()
             else "all vertices tested")  # fmt: skip
-    ylabel = ("normal motion (mm, inward < 0)" if tests.measure == "normal"
-              else "rotation (deg, counter-clockwise from the apex > 0)")  # fmt: skip
+    ylabel = _AXIS_LABELS.get(tests.measure, f"{tests.measure} ({tests.unit})")
     ax.set(xlabel="fraction of the cycle", ylabel=ylabel, title=f"mean over {what}")
     ax.legend(frameon=False)
     fig.tight_layout()
