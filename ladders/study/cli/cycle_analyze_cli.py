@@ -1,25 +1,52 @@
-"""``symladders cycle-analyze``: where two groups' transported cycles differ.
+"""``symladders cycle-analyze``: the linear model on a cycle study's transported cycles.
 
-A thin wrapper of :func:`~ladders.study.sequences.compare_cycles` on the output of
-``symladders cycle-study`` (:mod:`.cycle_cli`), writing the analysis folder
-(:func:`~ladders.study.sequences.cycle_outputs.write_cycle_tests`).
+A thin wrapper of :func:`~ladders.study.sequences.cycle_model_analysis.analyze_cycle_model`
+(and, with ``--outcome``, :func:`~ladders.study.sequences.cycle_model_analysis.analyze_cycle_outcome`)
+on the output of ``symladders cycle-study`` (:mod:`.cycle_cli`). The model's flags
+(``--groups`` or ``--design`` with ``--model`` and ``--contrast``, ``--blocks``,
+``--tfce``, ``--aha``, ``--fwhm``, ``--outcome``, ``--compare``) are those of
+``symladders analyze`` (:mod:`.model_arguments`).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+import sys
 
 from .cli_types import (
     DefaultsFormatter,
+    OneLineParser,
     UsageError,
     existing_file,
     existing_folder,
+    nonnegative_int,
     output_folder,
     positive_float,
     positive_int,
 )
+from .model_arguments import add_model_arguments, model_request, print_outcome
 
 __all__ = ["add_cycle_analyze_parser", "run_cycle_analyze_command"]
+
+#: What the summaries are called in the printed counts.
+_COUNTED_ORDER = ("per_frame", "peak", "time_to_peak", "trajectory")
+_COUNTED = {"peak": "peak", "time_to_peak": "time to peak", "per_frame": "some frame",
+            "trajectory": "trajectory"}  # fmt: skip
+
+
+class _LegacyCompareParser(OneLineParser):
+    """``cycle-analyze``'s parser: the former ``--compare GROUP REFERENCE`` (two words) is
+    read as ``--compare GROUP,REFERENCE``, with a deprecation warning."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        args = list(sys.argv[1:] if args is None else args)
+        if "--compare" in args:
+            i = args.index("--compare")
+            pair = args[i + 1 : i + 3]
+            if len(pair) == 2 and not any(a.startswith("-") or "," in a for a in pair):
+                print("symladders cycle-analyze: warning: '--compare GROUP REFERENCE' is "
+                      f"deprecated; write '--compare {pair[0]},{pair[1]}'", file=sys.stderr)  # fmt: skip
+                args[i + 1 : i + 3] = [f"{pair[0]},{pair[1]}"]
+        return super().parse_known_args(args, namespace)
 
 
 def add_cycle_analyze_parser(sub) -> None:
@@ -38,15 +65,14 @@ def add_cycle_analyze_parser(sub) -> None:
         formatter_class=DefaultsFormatter,
     )
     p.add_argument("study", type=existing_folder, metavar="STUDY")
-    p.add_argument("--groups", type=existing_file, required=True,
-                   help="CSV with the columns subject,group (two groups)")  # fmt: skip
-    p.add_argument("--compare", nargs=2, default=None, metavar=("GROUP", "REFERENCE"),
-                   help="the two groups to compare (needed when the table has more than two)")  # fmt: skip
-    p.add_argument("--permutations", type=positive_int, default=5000)
-    p.add_argument("--seed", type=int, default=0, help="seed of the permutations")
-    p.add_argument("--tfce", action="store_true",
-                   help="also test the peak with threshold-free cluster enhancement on the "
-                        "atlas's mesh (a regional effect through noisy tracking)")  # fmt: skip
+    p.add_argument("--groups", type=existing_file, default=None,
+                   help="CSV table with the columns subject and group: two groups compared "
+                        "(the model 'group'; instead of --design)")  # fmt: skip
+    add_model_arguments(p, "tables per AHA segment (cycle_segments.csv), and the segments of "
+                           "--exclude-segments and the long axis of --measure rotation")  # fmt: skip
+    p.add_argument("--permutations", type=positive_int, default=5000,
+                   help="permutations per test")  # fmt: skip
+    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the permutations")
     p.add_argument("--measure", choices=("normal", "rotation"), default="normal",
                    help="the curve tested per vertex: the normal motion (mm), or the rotation "
                         "about the long axis (degrees, counter-clockwise seen from the apex; "
@@ -54,117 +80,122 @@ def add_cycle_analyze_parser(sub) -> None:
     p.add_argument("--min-radius", type=positive_float, default=5.0,
                    help="with --measure rotation: vertices closer to the long axis than this "
                         "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
-    p.add_argument("--fwhm", type=positive_float, default=None, metavar="MM",
-                   help="smooth every subject's map at every frame on the atlas before the "
-                        "tests, by the heat kernel of this full width at half maximum (mm); "
-                        "default: not smoothed")  # fmt: skip
-    p.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
-                   help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
-                        "landmark table's row 'atlas'): places the AHA segments for "
-                        "--exclude-segments and the long axis for --measure rotation")  # fmt: skip
     p.add_argument("--exclude-segments", type=int, nargs="+", default=None, metavar="SEGMENT",
                    help="AHA segments (1-17) left out of the tests, e.g. 17, the apical cap "
                         "thick short-axis slices resolve poorly; needs --aha")  # fmt: skip
+    p.add_argument("--summaries", nargs="+", default=list(_COUNTED_ORDER),
+                   choices=_COUNTED_ORDER, metavar="SUMMARY",
+                   help="the summaries of each vertex's curve tested: per_frame, peak, "
+                        "time_to_peak, trajectory")  # fmt: skip
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--output", "-o", type=output_folder, default=None,
                    help="folder of the results (default: STUDY/analysis)")  # fmt: skip
     p.set_defaults(run=run_cycle_analyze_command, output_is_file=False)
-
-
-def _two_groups(table: dict, compare, subjects) -> tuple[dict, tuple[str, str]]:
-    present = {s: g for s, g in table.items() if s in subjects}
-    missing = [s for s in subjects if s not in table]
-    if missing:
-        raise UsageError(f"symladders cycle-analyze: error: --groups: no group for {missing}")
-    names = compare or tuple(dict.fromkeys(present.values()))
-    if len(names) != 2:
-        raise UsageError(
-            "symladders cycle-analyze: error: --groups: expected two groups, found "
-            f"{sorted(set(present.values()))}; name two with --compare"
-        )
-    unknown = [g for g in names if g not in present.values()]
-    if unknown:
-        raise UsageError(f"symladders cycle-analyze: error: --compare: no subject in {unknown}")
-    return {s: g == names[0] for s, g in present.items() if g in names}, tuple(names)
+    p.__class__ = _LegacyCompareParser
 
 
 def _landmarks(args):
     """The atlas's landmarks of ``--aha`` (None without it); checks what needs them."""
+    from ..cohort.aha_segments import check_segments
+    from ..errors import CohortError
     from ..population import read_aha_landmarks
 
     if args.aha is None:
         if args.measure == "rotation":
             raise UsageError("symladders cycle-analyze: error: --measure rotation: needs --aha "
                              "(the atlas's apex and base-plane centre place the long axis)")  # fmt: skip
+        if args.exclude_segments is not None:
+            raise UsageError("symladders cycle-analyze: error: --exclude-segments: needs --aha "
+                             "(the atlas's landmarks that place the segments)")  # fmt: skip
         return None
-    if args.exclude_segments is None and args.measure != "rotation":
-        raise UsageError("symladders cycle-analyze: error: --aha: only used with "
-                         "--exclude-segments or --measure rotation")  # fmt: skip
     try:
+        if args.exclude_segments is not None:
+            check_segments(args.exclude_segments, "--exclude-segments")
         return read_aha_landmarks(args.aha)
-    except ValueError as exc:
-        raise UsageError(f"symladders cycle-analyze: error: --aha: {exc}") from None
-
-
-def _tested_segments(args, motion, lm):
-    """The vertices tested: all, or those outside ``--exclude-segments`` (None: all)."""
-    if args.exclude_segments is None:
-        return None
-    import numpy as np
-
-    from ..cohort.aha_segments import check_segments
-    from ..population.aha_model import aha_segments
-
-    if lm is None:
-        raise UsageError("symladders cycle-analyze: error: --exclude-segments: needs --aha "
-                         "(the atlas's landmarks that place the segments)")  # fmt: skip
-    try:
-        excluded = check_segments(args.exclude_segments, "--exclude-segments")
-        labels = aha_segments(motion.atlas, lm.apex, lm.base, lm.septum, motion.faces)
-    except ValueError as exc:
+    except (CohortError, ValueError) as exc:
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
-    tested = ~np.isin(labels, excluded)
-    if tested.sum() < 2:
-        raise UsageError("symladders cycle-analyze: error: --exclude-segments: no vertex left")
-    return tested
+
+
+def _check_group_sizes(request, study) -> None:
+    """Two groups of at least 3 of the study's subjects each (``--groups``)."""
+    from ..sequences import load_cycle_motion
+
+    subjects = set(load_cycle_motion(study).subjects)
+    groups = [g for s, g in zip(request.table["subject"], request.table["group"]) if s in subjects]
+    for name in dict.fromkeys(request.table["group"]):
+        if groups.count(name) < 3:
+            raise UsageError(f"symladders cycle-analyze: error: --groups {request.source}: group "
+                             f"{name!r} has {groups.count(name)} subject(s) in the study; each "
+                             "group needs at least 3 subjects")  # fmt: skip
+
+
+def _counts(tests, alpha: float) -> str:
+    parts = []
+    for summary in ("peak", "time_to_peak", "per_frame", "trajectory"):
+        if summary not in tests.tests():
+            continue
+        text = f"{_COUNTED[summary]} {int(tests.detected(summary, alpha).sum())}"
+        if tests.tfce:
+            text += f" (TFCE: {int(tests.detected(summary, alpha, tfce=True).sum())})"
+        parts.append(("peak rotation" + text[4:]) if summary == "peak" and tests.measure ==
+                     "rotation" else text)  # fmt: skip
+    return ", ".join(parts)
 
 
 def run_cycle_analyze_command(args) -> int:
-    """Compare two groups' cycles from parsed arguments."""
-    import numpy as np
+    """The linear model (or two groups) on the cycle study, from parsed arguments."""
+    from ..errors import CohortError
+    from ..sequences.cycle_model_analysis import analyze_cycle_model, analyze_cycle_outcome
 
-    from ..cohort import read_groups
-    from ..sequences import compare_cycles, load_cycle_motion
-    from ..sequences.cycle_outputs import write_cycle_tests
-
-    motion = load_cycle_motion(args.study)
-    labels, names = _two_groups(read_groups(args.groups), args.compare, motion.subjects)
-    if len(labels) < len(motion.subjects):  # subjects of other groups left out
-        keep = [i for i, s in enumerate(motion.subjects) if s in labels]
-        motion = type(motion)(tuple(motion.subjects[i] for i in keep),
-                              motion.displacement[keep], motion.atlas, motion.faces)  # fmt: skip
-    axis = _landmarks(args)
-    tested = _tested_segments(args, motion, axis)
+    prefix = "symladders cycle-analyze: error:"
+    request = model_request(args, "cycle-analyze")
+    landmarks = _landmarks(args)
+    curves = {"measure": args.measure, "min_radius": args.min_radius, "fwhm": args.fwhm}
+    if args.outcome is not None:
+        try:
+            outcome = analyze_cycle_outcome(
+                args.study, request.table, *args.outcome, args.output, baseline=args.baseline,
+                landmarks=landmarks, seed=args.seed, source=request.source, **curves,
+            )  # fmt: skip
+        except (CohortError, ValueError) as exc:
+            raise UsageError(f"{prefix} {exc}") from None
+        print_outcome(outcome, args.baseline)
+        if request.formula is None:
+            return 0
+    groups = None
+    if request.groups:
+        _check_group_sizes(request, args.study)
+        groups = tuple(dict.fromkeys(request.table["group"]))
+        if args.compare is not None:
+            groups = tuple(args.compare)
     try:
-        tests = compare_cycles(motion, labels, args.permutations,
-                               np.random.default_rng(args.seed), tfce=args.tfce,
-                               vertices=tested, measure=args.measure, axis=axis,
-                               min_radius=args.min_radius, fwhm=args.fwhm)  # fmt: skip
-    except ValueError as exc:  # e.g. a group of fewer than 3 subjects
-        raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
-    output = Path(args.output) if args.output else Path(args.study) / "analysis"
-    write_cycle_tests(output, motion, tests, names)
-    found = (tests.peak.p_fwer < 0.05).sum(), (tests.time_to_peak.p_fwer < 0.05).sum()
-    frames = (tests.per_frame.p_fwer < 0.05).any(axis=0).sum()
-    print(
-        f"symladders cycle-analyze: {names[0]} ({int(tests.labels.sum())}) against {names[1]} "
-        f"({int((~tests.labels).sum())}), {args.permutations:,} permutations"
-        + ("" if tests.fwhm is None else f", smoothed {tests.fwhm:g} mm FWHM")
-        + ": vertices found at "
-        f"FWER 5 %: peak {'rotation ' if tests.measure == 'rotation' else ''}{found[0]}"
-        + ("" if tests.peak_tfce is None
-           else f" (TFCE: {int((tests.peak_tfce.p_fwer_enhanced < 0.05).sum())})")
-        + f", time to peak {found[1]}, some frame {frames}"
-        + ("" if tests.tested.all() else f" (of {int(tests.tested.sum())} vertices tested)")
-        + f"; in {output}"
-    )  # fmt: skip
+        outcome = analyze_cycle_model(
+            args.study, request.table, request.formula, request.contrasts, args.output,
+            n_permutations=args.permutations, seed=args.seed, tfce=args.tfce,
+            landmarks=landmarks, exclude_segments=args.exclude_segments, blocks=args.blocks,
+            alpha=args.alpha, groups=groups, summaries=tuple(dict.fromkeys(args.summaries)),
+            progress=not args.no_progress, figures=not args.no_figures, source=request.source,
+            **curves,
+        )  # fmt: skip
+    except (CohortError, ValueError) as exc:
+        raise UsageError(f"{prefix} {exc}") from None
+    first = outcome.tests[0]
+    tested = "" if first.tested.all() else f" (of {int(first.tested.sum())} vertices tested)"
+    smoothed = "" if args.fwhm is None else f", smoothed {args.fwhm:g} mm FWHM"
+    folder = outcome.paths[0].parent
+    level = f"FWER {100 * args.alpha:g} %"
+    if groups is not None:
+        n_first = int(first.labels.sum())
+        print(f"symladders cycle-analyze: {groups[0]} ({n_first}) against {groups[1]} "
+              f"({len(first.labels) - n_first}), {args.permutations:,} permutations{smoothed}: "
+              f"vertices found at {level}: {_counts(first, args.alpha)}{tested}; in {folder}")  # fmt: skip
+    else:
+        print(f"symladders cycle-analyze: model '{request.formula}', "
+              f"{len(outcome.model.kept)} subjects, {args.permutations:,} permutations"
+              f"{smoothed}, trajectory on {first.components} component(s){tested}; in {folder}")  # fmt: skip
+        for tests in outcome.tests:
+            print(f"'{tests.contrast}': vertices found at {level}: {_counts(tests, args.alpha)}")
+    if outcome.left_out:
+        print(f"left out (not in {request.source.name}): {', '.join(outcome.left_out)}")
     return 0

@@ -23,6 +23,8 @@
   (:func:`segment_table`);
 - :mod:`.model_comparison`: a linear model's contrast tested per vertex (covariates,
   several groups, TFCE) and per AHA segment (:func:`compare_model`);
+  :mod:`.model_design`: a design table checked against a study's subjects, its
+  contrasts and blocks (:func:`model_design`, shared with the whole cycle's analysis);
   :mod:`.model_analysis`: the analysis of a study folder with a design table
   (:func:`analyze_model`), as ``symladders analyze --design`` runs it;
   :mod:`.outcome_analysis`: survival predicted from every motion (:func:`analyze_outcome`,
@@ -79,9 +81,10 @@ from .ideal_transport import (
     ideal_transport,
     transport_error,
 )
-from .model_analysis import ModelOutcome, analyze_model, check_design_table
+from .model_analysis import ModelOutcome, analyze_model
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
-from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays
+from .model_design import ModelDesign, check_design_table, groups_design, model_design
+from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays, predict_outcome
 from .segment_table import SegmentTable, segment_means, segment_table
 from .transported_motion import (
     NO_TRANSPORT,
@@ -106,9 +109,13 @@ __all__ = [
     "OutcomeOutcome",
     "analyze_outcome",
     "outcome_arrays",
+    "predict_outcome",
     "ModelOutcome",
     "analyze_model",
     "check_design_table",
+    "ModelDesign",
+    "groups_design",
+    "model_design",
     "MODEL_TESTS",
     "ModelComparison",
     "compare_model",
