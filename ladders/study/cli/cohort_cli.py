@@ -137,7 +137,8 @@ def add_cohort_parser(sub) -> None:
         type=_nonnegative,
         default=None,
         help="size of the abnormality: the fraction of the motion removed (0-1) for "
-        "hypokinesia/radial/longitudinal, degrees of rotation for twist (default "
+        "hypokinesia/radial/longitudinal, degrees of rotation for twist, the delay of the "
+        "end-systole as a fraction of the cycle for delay (default "
         + ", ".join(f"{k} {v:g}" for k, v in DEFAULT_MAGNITUDE.items())
         + ")",
     )

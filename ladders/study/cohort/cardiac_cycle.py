@@ -24,16 +24,18 @@ as it shortens). See ``docs/cohort.md`` ("The whole cycle").
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
 
 from ..errors import CohortError
-from .planted_effect import MotionAbnormality, planted_modulation
+from .planted_effect import SCALED, MotionAbnormality, planted_modulation
 from .synthetic_lv import SubjectParameters, lv_shapes
 
 __all__ = [
     "cycle_fraction",
+    "frame_abnormality",
     "frame_times",
     "motion_forward",
     "motion_inverse",
@@ -77,6 +79,11 @@ def _check_inputs(params, abnormality) -> None:
     if abnormality is not None and not isinstance(abnormality, MotionAbnormality):
         raise CohortError(
             f"abnormality: expected a MotionAbnormality or None, got {type(abnormality).__name__}"
+        )
+    if abnormality is not None and abnormality.kind == "delay":
+        raise CohortError(
+            "abnormality: a delay depends on the time of the cycle, not on the fraction f of "
+            "the motion: give frame_abnormality(abnormality, t, es_phase)"
         )
 
 
@@ -122,6 +129,37 @@ def cycle_fraction(t, es_phase: float = 0.35):
     return float(out) if out.ndim == 0 else out
 
 
+def frame_abnormality(
+    abnormality: MotionAbnormality | None, t: float, es_phase: float = 0.35
+) -> MotionAbnormality | None:
+    """The abnormality acting at time ``t`` of the cycle (the others are the same at every time).
+
+    A ``"delay"`` of ``d`` (a fraction of the cycle) gives its segments the time course
+    of a cycle whose end-systole is at ``es_phase + d``: at time ``t`` they have reached
+    ``g = cycle_fraction(t, es_phase + d)`` of their motion where the rest has reached
+    ``f = cycle_fraction(t, es_phase)``. That is the motion at fraction ``f`` with the
+    radial contraction, the shortening and the rotation scaled by ``g / f`` in the
+    segments (by ``1 + w (g / f - 1)`` across their transitions, ``w`` the segments'
+    weight): a :data:`~.planted_effect.SCALED` abnormality of magnitude ``1 - g / f``.
+    Inside the segments the peak comes ``d`` later and the amplitude is unchanged; ED
+    (``t = 0``) is unchanged (``g / f`` there is its limit ``(es_phase / (es_phase +
+    d))^2``). Raises :class:`CohortError` when ``es_phase + d >= 1``.
+    """
+    if abnormality is None or abnormality.kind != "delay":
+        return abnormality
+    late = float(es_phase) + abnormality.magnitude
+    if not late < 1.0:
+        raise CohortError(
+            f"abnormality: a delay of {abnormality.magnitude:g} after end-systole at "
+            f"{es_phase:g} of the cycle ends the contraction after the cycle (es_phase + delay "
+            "must be < 1)"
+        )
+    f, g = cycle_fraction(t, es_phase), cycle_fraction(t, late)
+    ratio = g / f if f > 0 else (es_phase / late) ** 2
+    return MotionAbnormality(SCALED, abnormality.segments, 1.0 - ratio,
+                             abnormality.transition_height, abnormality.transition_angle)  # fmt: skip
+
+
 def _fields(params: SubjectParameters, u, phi, abnormality):
     """``r``, ``l`` and ``psi`` (radians) at heights ``u`` and longitudes ``phi`` (as lv_shapes)."""
     r = (
@@ -135,6 +173,8 @@ def _fields(params: SubjectParameters, u, phi, abnormality):
         modulation = planted_modulation(abnormality, np.arccos(1.0 - u), phi)
         r = r * modulation.radial
         shortening = shortening * modulation.longitudinal
+        if modulation.rotation is not None:
+            psi_deg = psi_deg * modulation.rotation
         psi_deg = psi_deg + modulation.twist
     return r, shortening, np.deg2rad(psi_deg)
 
@@ -154,26 +194,32 @@ def _coupled(abnormality) -> bool:
 
 
 def _slopes(abnormality: MotionAbnormality, u, phi):
-    """Derivatives in ``u`` and ``phi`` of the modulation's longitudinal factor and twist (deg)."""
+    """The modulation's rotation factor, and the derivatives in ``u`` and ``phi`` of its
+    longitudinal factor, twist (deg) and rotation factor."""
 
     def mod(uu, pp):
         m = planted_modulation(abnormality, np.arccos(1.0 - uu), pp)
-        return m.longitudinal, m.twist
+        rotation = np.ones_like(m.twist) if m.rotation is None else m.rotation
+        return m.longitudinal, m.twist, rotation
 
     e = _SLOPE_STEP
     up, um = np.minimum(u + e, 1.0), np.maximum(u - e, 0.0)
-    (lo_p, tw_p), (lo_m, tw_m) = mod(up, phi), mod(um, phi)
-    (lo_q, tw_q), (lo_n, tw_n) = mod(u, phi + e), mod(u, phi - e)
-    du = up - um
-    return (lo_p - lo_m) / du, (lo_q - lo_n) / (2 * e), (tw_p - tw_m) / du, (tw_q - tw_n) / (2 * e)
+    (lo_p, tw_p, ro_p), (lo_m, tw_m, ro_m) = mod(up, phi), mod(um, phi)
+    (lo_q, tw_q, ro_q), (lo_n, tw_n, ro_n) = mod(u, phi + e), mod(u, phi - e)
+    du, dphi = up - um, 2 * e
+    rotation = mod(u, phi)[2]
+    return ((lo_p - lo_m) / du, (lo_q - lo_n) / dphi, (tw_p - tw_m) / du, (tw_q - tw_n) / dphi,
+            rotation, (ro_p - ro_m) / du, (ro_q - ro_n) / dphi)  # fmt: skip
 
 
 def _jacobian(params, f, s, chi, shortening, slopes):
     """``J = det d(z'/c, phi')/d(z/c, phi)`` and ``d phi'/d phi`` (``chi``: u is not clipped)."""
-    lon_u, lon_phi, tw_u, tw_phi = slopes
-    l0 = params.longitudinal_shortening
-    psi_u = np.deg2rad(tw_u - params.apex_rotation - params.base_rotation)
-    turn = 1.0 + f * np.deg2rad(tw_phi)
+    lon_u, lon_phi, tw_u, tw_phi, rot, rot_u, rot_phi = slopes
+    l0, a, b = params.longitudinal_shortening, params.apex_rotation, params.base_rotation
+    u = np.clip(s, 0.0, 1.0)
+    psi0 = a * (1.0 - u) - b * u  # degrees, before the modulation's factor
+    psi_u = np.deg2rad(tw_u + rot_u * psi0 - rot * (a + b))
+    turn = 1.0 + f * np.deg2rad(tw_phi + rot_phi * psi0)
     stretch = 1.0 - f * shortening - f * s * l0 * lon_u * chi
     return stretch * turn + f * f * s * l0 * lon_phi * psi_u * chi, turn
 
@@ -186,9 +232,16 @@ def _area_factor(params, s, phi, f, shortening, abnormality):
     return _jacobian(params, f, s, (s > 0.0) & (s < 1.0), shortening, slopes)[0]
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=64)
 def _modulation_grid(abnormality: MotionAbnormality):
     """The modulation's longitudinal factor and its and the twist's slopes on a fine grid."""
+    if abnormality.kind == SCALED and abnormality.magnitude != 1.0:
+        # linear in the magnitude: the grid of the unit scaling, rescaled (a delay's frames)
+        u, phi, unit, slopes = _modulation_grid(replace(abnormality, magnitude=1.0))
+        m = abnormality.magnitude
+        lon = 1.0 - m * (1.0 - unit)
+        lon_u, lon_phi, tw_u, tw_phi, _, rot_u, rot_phi = slopes
+        return u, phi, lon, (m * lon_u, m * lon_phi, tw_u, tw_phi, lon, m * rot_u, m * rot_phi)
     h, a = abnormality.transition_height, abnormality.transition_angle
     n_u = int(min(4001, max(201, np.ceil(8.0 / h) + 1)))
     n_phi = int(min(7200, max(360, np.ceil(8.0 * 360.0 / a))))
@@ -218,7 +271,10 @@ def check_invertible(
     _check_inputs(params, abnormality)
     f = _check_f(f)
     p = params
-    r_max = max(
+    gain = 1.0  # the largest factor of the motion a modulation applies (a scaling above 1)
+    if abnormality is not None and abnormality.kind == SCALED:
+        gain = max(1.0, 1.0 - abnormality.magnitude)
+    r_max = gain * max(
         p.radial_contraction * (1.0 + s1 * abs(p.contraction_heterogeneity))
         * (1.0 + s2 * abs(p.contraction_gradient))
         for s1 in (-1, 1) for s2 in (-1, 1)
@@ -228,12 +284,12 @@ def check_invertible(
             f"params: the radial contraction reaches r = {r_max:.3g} at f = {f:g}: the radial "
             "map rho -> (1 - f r) rho is not invertible (1 - f r <= 0)"
         )
-    if f * p.longitudinal_shortening >= 1.0:
+    if f * gain * p.longitudinal_shortening >= 1.0:
         raise CohortError(
-            f"params: longitudinal_shortening {p.longitudinal_shortening:g} at f = {f:g} "
+            f"params: longitudinal_shortening {gain * p.longitudinal_shortening:g} at f = {f:g} "
             "collapses the long axis (1 - f l <= 0): the motion is not invertible"
         )
-    margin = min(1.0 - f * max(r_max, 0.0), 1.0 - f * max(p.longitudinal_shortening, 0.0))
+    margin = min(1.0 - f * max(r_max, 0.0), 1.0 - f * gain * max(p.longitudinal_shortening, 0.0))
     if not _coupled(abnormality) or f == 0.0:
         return margin
     if abnormality.transition_height == 0.0 or abnormality.transition_angle == 0.0:
@@ -387,18 +443,21 @@ def cycle_frames(
     """The subject's surface at every frame of the cycle, in vertex correspondence.
 
     Frame ``k`` is the ED surface of :func:`lv_shapes` moved by :func:`motion_forward`
-    at ``f = cycle_fraction(k / n_frames, es_phase)``: frame 0 is the ED surface, and
-    the ES surface is frame ``es_phase * n_frames`` when that is an integer.
+    at ``f = cycle_fraction(k / n_frames, es_phase)`` with the abnormality acting at
+    that time (:func:`frame_abnormality`): frame 0 is the ED surface, and the ES surface
+    is frame ``es_phase * n_frames`` when that is an integer.
 
     ``theta, phi`` (shape ``(k,)``) are parametric coordinates (:func:`lv_grid`); returns
     an array ``(n_frames, k, 3)``.
     """
     n = _check_n_frames(n_frames)
-    fractions = cycle_fraction(frame_times(n), es_phase)
+    times = frame_times(n)
+    fractions = cycle_fraction(times, es_phase)
     theta, phi = np.asarray(theta, dtype=float), np.asarray(phi, dtype=float)
     if theta.ndim != 1 or theta.shape != phi.shape:
         raise CohortError(
             f"theta, phi: expected two arrays of shape (k,), got {theta.shape}, {phi.shape}"
         )
     ed, _ = lv_shapes(params, theta, phi)
-    return np.stack([motion_forward(params, ed, f, abnormality) for f in fractions])
+    return np.stack([motion_forward(params, ed, f, frame_abnormality(abnormality, t, es_phase))
+                     for t, f in zip(times, fractions)])  # fmt: skip

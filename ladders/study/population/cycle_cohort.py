@@ -27,7 +27,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cohort.cardiac_cycle import check_invertible, cycle_fraction, cycle_frames, frame_times
+from ..cohort.cardiac_cycle import (
+    check_invertible,
+    cycle_fraction,
+    cycle_frames,
+    frame_abnormality,
+    frame_times,
+)
 from ..cohort.planted_effect import MotionAbnormality
 from ..cohort.synthetic_lv import SubjectParameters, SyntheticLVModel, lv_grid, lv_shapes
 from ..errors import CohortError
@@ -63,6 +69,8 @@ class CohortCycles:
         The patients' planted abnormality.
     data : TwoGroupCohort or None
         The cohort the cycles are of (its groups and planted region).
+    es_phase : float
+        The time of end-systole (fraction of the cycle).
     """
 
     frames: np.ndarray
@@ -74,6 +82,7 @@ class CohortCycles:
     parameters: tuple = ()
     abnormality: MotionAbnormality | None = None
     data: object = None
+    es_phase: float = 0.35
 
     def _index(self, subject) -> int:
         if isinstance(subject, str):
@@ -86,12 +95,19 @@ class CohortCycles:
             raise CohortError(f"subject: expected a name or an index < {n}, got {subject!r}")
         return int(subject) % len(self.names)
 
-    def motion_of(self, subject) -> tuple[SubjectParameters, MotionAbnormality | None]:
-        """A subject's (name or index) parameters and planted abnormality (None for a control)."""
+    def motion_of(
+        self, subject, frame: int | None = None
+    ) -> tuple[SubjectParameters, MotionAbnormality | None]:
+        """A subject's (name or index) parameters and planted abnormality (None for a control);
+        with ``frame``, the abnormality acting at that frame (:func:`frame_abnormality`)."""
         i = self._index(subject)
         if len(self.parameters) != len(self.names):
             raise CohortError("parameters: these cycles carry no subject parameters")
-        return self.parameters[i], self.abnormality if self.patients[i] else None
+        abnormality = self.abnormality if self.patients[i] else None
+        if frame is not None:
+            self._fraction(frame)  # checks the frame
+            abnormality = frame_abnormality(abnormality, float(self.times[frame]), self.es_phase)
+        return self.parameters[i], abnormality
 
     def check_invertible(self) -> np.ndarray:
         """Every subject's smallest margin of :func:`check_invertible` over the frames.
@@ -100,16 +116,24 @@ class CohortCycles:
         subject whose motion folds the volume at some frame (its images cannot be rendered).
         """
         margins = np.empty(len(self.names))
+        timed = self.abnormality is not None and self.abnormality.kind == "delay"
+        frames = (
+            range(len(self.times)) if timed else np.unique(self.fractions, return_index=True)[1]
+        )
         for i, name in enumerate(self.names):
-            params, abnormality = self.motion_of(i)
             try:
                 margins[i] = min(
-                    check_invertible(params, f, abnormality) for f in set(self.fractions)
-                )
+                    check_invertible(*self._at(i, t)) for t in frames
+                )  # fmt: skip
             except CohortError as error:
                 hint = "make_two_group_cycles draws the cohort with CYCLE_ABNORMALITY"
                 raise CohortError(f"subject {name!r}: {error} ({hint})") from None
         return margins
+
+    def _at(self, i: int, frame: int) -> tuple:
+        """``(params, f, abnormality)`` of subject ``i`` at a frame."""
+        params, abnormality = self.motion_of(i, frame)
+        return params, float(self.fractions[frame]), abnormality
 
     def _fraction(self, frame) -> float:
         ok = isinstance(frame, (int, np.integer)) and not isinstance(frame, bool)
@@ -120,12 +144,12 @@ class CohortCycles:
 
     def render_labels(self, subject, affine, shape, frame: int, **options) -> np.ndarray:
         """A subject's label image at a frame (:func:`render_labels`, ``options`` its keywords)."""
-        params, abnormality = self.motion_of(subject)
+        params, abnormality = self.motion_of(subject, frame)
         return render_labels(params, affine, shape, self._fraction(frame), abnormality, **options)
 
     def render_cine(self, subject, affine, shape, frame: int, rng=None, **options) -> np.ndarray:
         """A subject's cine image at a frame (:func:`render_cine`, ``options`` its keywords)."""
-        params, abnormality = self.motion_of(subject)
+        params, abnormality = self.motion_of(subject, frame)
         f = self._fraction(frame)
         return render_cine(params, affine, shape, f, rng, abnormality=abnormality, **options)
 
@@ -195,9 +219,8 @@ def two_group_cycles(
     stacked = np.stack(frames) if frames else np.zeros((0, n, len(cohort.atlas), 3))
     names = tuple(s.name for s in cohort.subjects)
     parameters = tuple(s.parameters for s in cohort.subjects)
-    return CohortCycles(
-        stacked, names, patients, times, fractions, cohort.faces, parameters, abnormality, data
-    )
+    return CohortCycles(stacked, names, patients, times, fractions, cohort.faces, parameters,
+                        abnormality, data, float(es_phase))  # fmt: skip
 
 
 def make_two_group_cycles(
