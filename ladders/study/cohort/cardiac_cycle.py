@@ -30,8 +30,9 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import CohortError
-from .planted_effect import SCALED, MotionAbnormality, planted_modulation
+from .planted_effect import SCALED, MotionAbnormality, frame_abnormality, planted_modulation
 from .synthetic_lv import SubjectParameters, lv_shapes
+from .time_course import check_n_frames, cycle_fraction, frame_times, number
 
 __all__ = [
     "cycle_fraction",
@@ -50,25 +51,8 @@ _ON_SURFACE = 1e-13  # rho^2 - rho_e^2 below this (relative) is on the endocardi
 _SLOPE_STEP = 1e-4  # central differences of the modulation, in u and in radians
 
 
-def _number(value, name: str, accept, what: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = np.nan
-    if isinstance(value, bool) or not (np.isfinite(x) and accept(x)):
-        raise CohortError(f"{name}: expected {what}, got {value!r}")
-    return x
-
-
 def _check_f(f) -> float:
-    return _number(f, "f", lambda x: 0 <= x <= 1, "a fraction of the end-systolic motion in [0, 1]")
-
-
-def _check_n_frames(n_frames) -> int:
-    ok = isinstance(n_frames, (int, np.integer)) and not isinstance(n_frames, bool)
-    if not ok or n_frames < 2:
-        raise CohortError(f"n_frames: expected an integer >= 2, got {n_frames!r}")
-    return int(n_frames)
+    return number(f, "f", lambda x: 0 <= x <= 1, "a fraction of the end-systolic motion in [0, 1]")
 
 
 def _check_inputs(params, abnormality) -> None:
@@ -95,69 +79,6 @@ def _check_points(points) -> np.ndarray:
     if x.ndim < 1 or x.shape[-1] != 3 or not np.isfinite(x).all():
         raise CohortError(f"points: expected finite coordinates of shape (..., 3), got {x.shape}")
     return x
-
-
-def frame_times(n_frames: int) -> np.ndarray:
-    """Times of the frames of a cycle, ``t_k = k / n_frames``, shape ``(n_frames,)``."""
-    n = _check_n_frames(n_frames)
-    return np.arange(n) / n
-
-
-def cycle_fraction(t, es_phase: float = 0.35):
-    """Fraction of the end-systolic motion reached at time ``t`` of the cycle.
-
-    Raised-cosine contraction from ED to ES, then raised-cosine relaxation back to ED::
-
-        f(t) = (1 - cos(pi t / t_es)) / 2                      0 <= t <= t_es
-        f(t) = (1 + cos(pi (t - t_es) / (1 - t_es))) / 2       t_es < t <= 1
-
-    ``f`` is continuously differentiable and periodic (``f' = 0`` at ED and at ES). ``t``
-    (float or array) is a fraction of the cycle in ``[0, 1]`` (frame ``k`` of ``n`` is at
-    ``k / n``), ``es_phase`` the time of end-systole in ``(0, 1)``; returns ``f(t)`` in
-    ``[0, 1]``, the shape of ``t``.
-    """
-    es = _number(es_phase, "es_phase", lambda x: 0 < x < 1, "a fraction of the cycle in (0, 1)")
-    try:
-        tt = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise CohortError(f"t: expected times in [0, 1], got {t!r}") from None
-    if not np.isfinite(tt).all() or np.any(tt < 0.0) or np.any(tt > 1.0):
-        raise CohortError(f"t: expected times in [0, 1] (fractions of the cycle), got {t!r}")
-    contraction = 0.5 * (1.0 - np.cos(np.pi * tt / es))
-    relaxation = 0.5 * (1.0 + np.cos(np.pi * (tt - es) / (1.0 - es)))
-    out = np.where(tt <= es, contraction, relaxation)
-    return float(out) if out.ndim == 0 else out
-
-
-def frame_abnormality(
-    abnormality: MotionAbnormality | None, t: float, es_phase: float = 0.35
-) -> MotionAbnormality | None:
-    """The abnormality acting at time ``t`` of the cycle (the others are the same at every time).
-
-    A ``"delay"`` of ``d`` (a fraction of the cycle) gives its segments the time course
-    of a cycle whose end-systole is at ``es_phase + d``: at time ``t`` they have reached
-    ``g = cycle_fraction(t, es_phase + d)`` of their motion where the rest has reached
-    ``f = cycle_fraction(t, es_phase)``. That is the motion at fraction ``f`` with the
-    radial contraction, the shortening and the rotation scaled by ``g / f`` in the
-    segments (by ``1 + w (g / f - 1)`` across their transitions, ``w`` the segments'
-    weight): a :data:`~.planted_effect.SCALED` abnormality of magnitude ``1 - g / f``.
-    Inside the segments the peak comes ``d`` later and the amplitude is unchanged; ED
-    (``t = 0``) is unchanged (``g / f`` there is its limit ``(es_phase / (es_phase +
-    d))^2``). Raises :class:`CohortError` when ``es_phase + d >= 1``.
-    """
-    if abnormality is None or abnormality.kind != "delay":
-        return abnormality
-    late = float(es_phase) + abnormality.magnitude
-    if not late < 1.0:
-        raise CohortError(
-            f"abnormality: a delay of {abnormality.magnitude:g} after end-systole at "
-            f"{es_phase:g} of the cycle ends the contraction after the cycle (es_phase + delay "
-            "must be < 1)"
-        )
-    f, g = cycle_fraction(t, es_phase), cycle_fraction(t, late)
-    ratio = g / f if f > 0 else (es_phase / late) ** 2
-    return MotionAbnormality(SCALED, abnormality.segments, 1.0 - ratio,
-                             abnormality.transition_height, abnormality.transition_angle)  # fmt: skip
 
 
 def _fields(params: SubjectParameters, u, phi, abnormality):
@@ -450,7 +371,7 @@ def cycle_frames(
     ``theta, phi`` (shape ``(k,)``) are parametric coordinates (:func:`lv_grid`); returns
     an array ``(n_frames, k, 3)``.
     """
-    n = _check_n_frames(n_frames)
+    n = check_n_frames(n_frames)
     times = frame_times(n)
     fractions = cycle_fraction(times, es_phase)
     theta, phi = np.asarray(theta, dtype=float), np.asarray(phi, dtype=float)

@@ -7,7 +7,7 @@ change of twist (a rotation about the long axis, tangential to the wall of a
 ventricle of revolution, which a surface without material landmarks cannot
 show), or a delayed contraction (the segments reach their end-systole later in the
 cycle, with the same amplitude: a change of timing only the whole cycle shows, see
-:func:`~ladders.study.cohort.cardiac_cycle.frame_abnormality`). :func:`planted_modulation` turns it into the per-vertex
+:func:`frame_abnormality`). :func:`planted_modulation` turns it into the per-vertex
 :class:`~ladders.study.cohort.synthetic_lv.MotionModulation` of
 :func:`~ladders.study.cohort.synthetic_lv.lv_shapes`, and
 :func:`planted_region` into the ground truth on the atlas: the weight of the
@@ -24,12 +24,14 @@ import numpy as np
 from ..errors import CohortError
 from .aha_segments import AHA_SEGMENTS, check_segments, segment_weights
 from .synthetic_lv import MotionModulation
+from .time_course import cycle_fraction
 
 __all__ = [
     "EFFECT_KINDS",
     "DEFAULT_MAGNITUDE",
     "ES_PHASE",
     "SCALED",
+    "frame_abnormality",
     "MotionAbnormality",
     "PlantedRegion",
     "planted_modulation",
@@ -51,7 +53,7 @@ EFFECT_KINDS = {
 DEFAULT_MAGNITUDE = {"hypokinesia": 0.5, "radial": 0.5, "longitudinal": 0.5, "twist": 5.0,
                      "delay": 0.1}  # fmt: skip
 
-#: A delay at one time of the cycle (:func:`~.cardiac_cycle.frame_abnormality`): the
+#: A delay at one time of the cycle (:func:`frame_abnormality`): the
 #: radial contraction, the shortening and the rotation scaled by ``1 - magnitude w`` in
 #: the segments (``magnitude`` may be negative: more motion than the others at that time).
 SCALED = "scaled"
@@ -208,7 +210,7 @@ def planted_modulation(
     """The per-vertex change of motion of ``abnormality`` on the grid ``(theta, phi)``.
 
     A delay is planted in the end-systolic shape at :data:`ES_PHASE`: the segments have
-    then reached only part of their motion (:func:`~.cardiac_cycle.frame_abnormality`).
+    then reached only part of their motion (:func:`frame_abnormality`).
     """
     w = segment_weights(
         theta,
@@ -220,8 +222,6 @@ def planted_modulation(
     one = np.ones_like(w)
     kind = abnormality.kind
     if kind == "delay":  # at end-systole, the delayed segments' share of their motion
-        from .cardiac_cycle import frame_abnormality
-
         return planted_modulation(frame_abnormality(abnormality, ES_PHASE, ES_PHASE), theta, phi)
     reduce = 1.0 - abnormality.magnitude * w
     radial = reduce if kind in ("hypokinesia", "radial", SCALED) else one
@@ -244,3 +244,34 @@ def planted_region(
         abnormality.transition_angle,
     )
     return PlantedRegion(weight=w, affected=w >= 0.5, abnormality=abnormality)
+
+
+def frame_abnormality(
+    abnormality: MotionAbnormality | None, t: float, es_phase: float = 0.35
+) -> MotionAbnormality | None:
+    """The abnormality acting at time ``t`` of the cycle (the others are the same at every time).
+
+    A ``"delay"`` of ``d`` (a fraction of the cycle) gives its segments the time course
+    of a cycle whose end-systole is at ``es_phase + d``: at time ``t`` they have reached
+    ``g = cycle_fraction(t, es_phase + d)`` of their motion where the rest has reached
+    ``f = cycle_fraction(t, es_phase)``. That is the motion at fraction ``f`` with the
+    radial contraction, the shortening and the rotation scaled by ``g / f`` in the
+    segments (by ``1 + w (g / f - 1)`` across their transitions, ``w`` the segments'
+    weight): a :data:`SCALED` abnormality of magnitude ``1 - g / f``.
+    Inside the segments the peak comes ``d`` later and the amplitude is unchanged; ED
+    (``t = 0``) is unchanged (``g / f`` there is its limit ``(es_phase / (es_phase +
+    d))^2``). Raises :class:`CohortError` when ``es_phase + d >= 1``.
+    """
+    if abnormality is None or abnormality.kind != "delay":
+        return abnormality
+    late = float(es_phase) + abnormality.magnitude
+    if not late < 1.0:
+        raise CohortError(
+            f"abnormality: a delay of {abnormality.magnitude:g} after end-systole at "
+            f"{es_phase:g} of the cycle ends the contraction after the cycle (es_phase + delay "
+            "must be < 1)"
+        )
+    f, g = cycle_fraction(t, es_phase), cycle_fraction(t, late)
+    ratio = g / f if f > 0 else (es_phase / late) ** 2
+    return MotionAbnormality(SCALED, abnormality.segments, 1.0 - ratio,
+                             abnormality.transition_height, abnormality.transition_angle)  # fmt: skip

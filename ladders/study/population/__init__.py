@@ -3,8 +3,10 @@
 - :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
   motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
   :mod:`.cycle_cohort`: its whole cardiac cycle, every subject's frames and images
-  (:func:`make_two_group_cycles`, :func:`two_group_cycles`), written as 4-D label or cine
-  images with :func:`write_cycle_cohort` (:mod:`.cycle_images`);
+  (:func:`make_two_group_cycles`, :func:`two_group_cycles`; in several groups with
+  covariates :func:`covariate_cycles`), written as 4-D label or cine images with
+  :func:`write_cycle_cohort` (:mod:`.cycle_images`); :mod:`.cohort_outcome`: a survival
+  outcome simulated from the true regional motion (:func:`cohort_outcome`);
 - :mod:`.covariate_cohort`: the synthetic cohort in several groups (planted abnormalities,
   anatomy shifts) with age, sex and body size acting on the shapes, and its design table
   (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`); :mod:`.ideal_transport`:
@@ -51,6 +53,7 @@ from .analysis import (
     select_motions,
 )
 from .analysis_outputs import write_analysis
+from .cohort_outcome import cohort_outcome, regional_motion
 from .covariate_cohort import (
     DESIGN_FILE,
     AnatomyShift,
@@ -63,6 +66,7 @@ from .covariate_cohort import (
 from .cycle_cohort import (
     CYCLE_ABNORMALITY,
     CohortCycles,
+    covariate_cycles,
     make_two_group_cycles,
     two_group_cycles,
 )
@@ -167,6 +171,9 @@ __all__ = [
     "VALVE_PLANES_FILE",
     "write_cycle_cohort",
     "two_group_cycles",
+    "covariate_cycles",
+    "cohort_outcome",
+    "regional_motion",
     "AnatomyShift",
     "CohortGroup",
     "CovariateCohort",

@@ -31,6 +31,7 @@ from ..cohort.synthetic_lv import (
     make_synthetic_cohort,
 )
 from ..errors import CohortError
+from .cohort_outcome import OUTCOME_CENSORING, cohort_outcome
 from .two_groups import (
     _NOISE_KEY,
     CONTROLS,
@@ -49,6 +50,7 @@ __all__ = [
 #: The design table written next to the meshes (columns subject, group, age, sex, body_size).
 DESIGN_FILE = "design.csv"
 _COVARIATES_KEY = 4_000_000  # spawn keys of the covariate draws (one per group)
+_OUTCOME_KEY = 5_000_000  # spawn key of the outcome's draw
 _CLIP = 3.0  # the standard normal draws are clipped to +-3
 
 
@@ -266,6 +268,11 @@ class CovariateCohort:
     noise : float
         RMS of the segmentation noise, in mm.
     seed : int
+    outcome : dict or None
+        ``{subject: {"time": float, "event": 0 or 1}}``, a survival outcome simulated
+        from the regional motion (:func:`~.cohort_outcome.cohort_outcome`), or None.
+    outcome_effect : float or None
+        Its log hazard ratio per standard deviation of the regional motion.
     """
 
     cohort: Cohort
@@ -276,6 +283,8 @@ class CovariateCohort:
     model: Covariates
     noise: float = 0.0
     seed: int = 0
+    outcome: dict | None = None
+    outcome_effect: float | None = None
 
     @property
     def effects(self) -> dict:
@@ -283,11 +292,15 @@ class CovariateCohort:
         return self.model.effects()
 
     def design_table(self) -> dict:
-        """``{column: list}``: subject, group, age, sex, body_size in cohort order."""
+        """``{column: list}``: subject, group, age, sex, body_size (and time, event with an
+        outcome) in cohort order."""
         names = self.cohort.names
         table = {"subject": names, "group": [self.groups[s] for s in names]}
         for key in ("age", "sex", "body_size"):
             table[key] = [self.covariates[s][key] for s in names]
+        if self.outcome is not None:
+            for key in ("time", "event"):
+                table[key] = [self.outcome[s][key] for s in names]
         return table
 
     def description(self) -> dict:
@@ -310,6 +323,15 @@ class CovariateCohort:
             "region": None if first is None else self.regions[first].as_dict(),
             "groups": groups,
             "covariates": self.effects,
+            "outcome": None
+            if self.outcome is None
+            else {
+                "columns": ["time", "event"],
+                "log_hazard_ratio_per_sd": self.outcome_effect,
+                "of": "the normal motion ED -> ES averaged over the planted region (every "
+                "vertex without one), a weaker inward motion a higher hazard",
+                "censoring": OUTCOME_CENSORING,
+            },
         }
 
 
@@ -341,6 +363,7 @@ def make_covariate_cohort(
     noise: float = 0.0,
     noise_length: float = 10.0,
     model: SyntheticLVModel | None = None,
+    outcome_effect: float | None = None,
 ) -> CovariateCohort:
     """The synthetic cohort in several groups, with their planted effects and covariates.
 
@@ -363,6 +386,11 @@ def make_covariate_cohort(
         Segmentation noise RMS and correlation length, in mm (as in
         :func:`~ladders.study.population.make_two_group_cohort`).
     model : SyntheticLVModel, optional
+    outcome_effect : float, optional
+        Also a survival outcome (:func:`~.cohort_outcome.cohort_outcome`): the log hazard
+        ratio per standard deviation of each subject's normal motion ED -> ES over the
+        first planted region (every vertex without one); drawn from
+        ``SeedSequence(seed, spawn_key=(5000000,))``.
 
     Returns
     -------
@@ -413,7 +441,15 @@ def make_covariate_cohort(
         f"imbalance={covariates.imbalance:g}, noise={noise:g} mm, seed={seed})"
     )
     cohort = Cohort(base.atlas, base.faces, subjects, source)
-    return CovariateCohort(cohort, membership, table, regions, specs, covariates, noise, seed)
+    outcome = None
+    if outcome_effect is not None:
+        region = next((r.affected for r in regions.values() if r is not None), None)
+        time, event, _ = cohort_outcome(cohort, outcome_effect, _child(seed, _OUTCOME_KEY), region)
+        outcome = {s.name: {"time": float(f"{t:.6g}"), "event": int(e)}
+                   for s, t, e in zip(subjects, time, event)}  # fmt: skip
+        outcome_effect = float(outcome_effect)
+    return CovariateCohort(cohort, membership, table, regions, specs, covariates, noise, seed,
+                           outcome, outcome_effect)  # fmt: skip
 
 
 def write_covariate_cohort(data: CovariateCohort, folder, ext: str = ".vtk", **options) -> Path:

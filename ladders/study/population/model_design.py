@@ -147,7 +147,8 @@ def model_design(
         try:
             contrast_matrix(design, spec)
         except ValueError as exc:
-            raise CohortError(f"{where}: --contrast {spec!r}: {exc}") from None
+            reason = str(exc).removeprefix("contrast: ")
+            raise CohortError(f"{where}: --contrast {spec!r}: {reason}") from None
     labels = None
     if blocks is not None:
         if blocks not in table:

@@ -94,14 +94,14 @@ def _csv(header, rows) -> str:
 
 
 def _vertices_csv(all_tests: list, k: int) -> str:
-    header, rows = None, []
-    for tests in all_tests:
-        columns = vertex_columns(tests)
-        if header is None:
-            header = ["contrast", "vertex", *columns]
-        rows += [[tests.contrast, v, *(f"{columns[c][v]:.6g}" for c in header[2:])]
-                 for v in range(k)]  # fmt: skip
-    return _csv(header, rows)
+    """Every contrast's columns; a column one contrast lacks (an F test's effect) is empty."""
+    per_contrast = [vertex_columns(tests) for tests in all_tests]
+    names = list(dict.fromkeys(c for columns in per_contrast for c in columns))
+    rows = []
+    for tests, columns in zip(all_tests, per_contrast):
+        cells = [[f"{columns[c][v]:.6g}" if c in columns else "" for c in names] for v in range(k)]
+        rows += [[tests.contrast, v, *cells[v]] for v in range(k)]
+    return _csv(["contrast", "vertex", *names], rows)
 
 
 def _frames_csv(all_tests: list, fractions, alpha: float) -> str:

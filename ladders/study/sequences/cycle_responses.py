@@ -17,10 +17,17 @@ design, without its labels, so that the permutations stay exact): at each vertex
 curves are centred on their mean over the subjects and decomposed by the singular
 value decomposition. The number ``d`` of components is the same at every vertex: the
 fewest whose variance, summed over the tested vertices, reaches ``variance`` (0.9 by
-default) of the curves' total variance, capped at ``max_components`` (5) and at
-``n - 3``. The vertices' own components differ (each vertex keeps the shape of its own
-curves); the test of their scores is the test of the curves projected on them, and
-Pillai's trace does not depend on the basis chosen within that space.
+default) of the curves' total variance, at least ``min_components`` (2) and at most
+``max_components`` (5) and ``n - 3``. At least two, because a change of timing is
+orthogonal to the curve it changes: a curve ``g`` shifted by ``delta`` in time is
+``g - delta g'`` to first order, and over a periodic cycle ``g'`` is orthogonal to ``g``.
+Curves that differ between subjects mostly by their amplitude put nearly all of their
+variance in one component (the synthetic cohort's, with a tracking-like error: 92 to 96
+%), where a delayed contraction is not; the second component holds it
+(``benchmarks/bench_cycle_model.py`` measures both). The vertices' own components
+differ (each vertex keeps the shape of its own curves); the test of their scores is the
+test of the curves projected on them, and Pillai's trace does not depend on the basis
+chosen within that space.
 
 :func:`spatiotemporal_adjacency` links every tested vertex to its neighbours on the
 atlas at the same frame and to itself at the neighbouring frames: the graph on which
@@ -42,6 +49,7 @@ from .peaks import curve_peaks
 
 __all__ = [
     "TRAJECTORY_VARIANCE",
+    "TRAJECTORY_MIN_COMPONENTS",
     "TRAJECTORY_MAX_COMPONENTS",
     "CycleResponses",
     "TrajectoryComponents",
@@ -53,6 +61,8 @@ __all__ = [
 
 #: The fraction of the curves' variance the trajectory's components hold (the rule of ``d``).
 TRAJECTORY_VARIANCE = 0.9
+#: At least this many components per vertex (a curve's amplitude and its timing).
+TRAJECTORY_MIN_COMPONENTS = 2
 #: At most this many components per vertex.
 TRAJECTORY_MAX_COMPONENTS = 5
 
@@ -90,6 +100,7 @@ def trajectory_components(
     variance: float = TRAJECTORY_VARIANCE,
     max_components: int = TRAJECTORY_MAX_COMPONENTS,
     n_components: int | None = None,
+    min_components: int = TRAJECTORY_MIN_COMPONENTS,
 ) -> TrajectoryComponents:
     """The first principal components of every vertex's curves over the cycle (module rule).
 
@@ -104,6 +115,8 @@ def trajectory_components(
         At most this many (and at most ``n - 3`` and ``n_frames``).
     n_components : int, optional
         ``d`` itself (e.g. the vertices' for the segments' curves), instead of the rule.
+    min_components : int, default 2
+        At least this many (within the cap).
 
     Returns
     -------
@@ -126,7 +139,7 @@ def trajectory_components(
     if n_components is None:
         reached = np.cumsum(eigen) >= float(variance) * total * (1.0 - 1e-12)
         d = int(np.argmax(reached)) + 1 if total > 0 else 1
-        d = min(d, cap)
+        d = min(max(d, int(min_components)), cap)
     else:
         d = int(n_components)
         if not 1 <= d <= cap:
@@ -234,6 +247,7 @@ def cycle_responses(
     vertices=None,
     variance: float = TRAJECTORY_VARIANCE,
     max_components: int = TRAJECTORY_MAX_COMPONENTS,
+    min_components: int = TRAJECTORY_MIN_COMPONENTS,
 ) -> CycleResponses:
     """The responses of the cycle's tests on ``motion`` (see the module).
 
@@ -249,7 +263,7 @@ def cycle_responses(
         Every map smoothed on the atlas first (mm, full width at half maximum).
     vertices : array of bool, shape (k,), optional
         The vertices tested (default all).
-    variance, max_components : the rule of the trajectory's components.
+    variance, max_components, min_components : the rule of the trajectory's components.
 
     Returns
     -------
@@ -272,7 +286,8 @@ def cycle_responses(
         axis = None
     peaks, times = np.full((n, k), np.nan), np.full((n, k), np.nan)
     peaks[:, finite], times[:, finite] = signed_peaks(curves[..., finite], measure)
-    trajectory = trajectory_components(curves[..., tested], variance, max_components)
+    trajectory = trajectory_components(curves[..., tested], variance, max_components,
+                                       min_components=min_components)  # fmt: skip
     faces = sub_faces(np.asarray(motion.faces), tested)
     return CycleResponses(tuple(motion.subjects), curves, tested, peaks, times, trajectory, faces,
                           measure, axis, float(min_radius), fwhm)  # fmt: skip
