@@ -227,6 +227,11 @@ def test_cli_covariate_cycle_cohort_then_the_model_and_bad_input(tmp_path, capsy
     assert {p.name for p in out.glob("*.png")} == {
         "cycle_curves_group.png", "cycle_trajectory_group.png", "cycle_curves_age.png",
         "cycle_trajectory_age.png"}  # fmt: skip
+    blocked = [*base, "--contrast", "age", "--blocks", "sex", "--summaries", "peak",
+               "--no-figures", "-o", str(tmp_path / "blocks")]  # fmt: skip
+    assert main(blocked) == 0 and "'age': vertices found at FWER 5 %: peak " in (
+        capsys.readouterr().out
+    )
     # bad input: one line naming the file and the culprit
     bad = tmp_path / "bad.csv"
     bad.write_text((cohort / "design.csv").read_text() + "stranger,controls,60,F,1.0,3,1\n")

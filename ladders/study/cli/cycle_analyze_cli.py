@@ -53,14 +53,21 @@ def add_cycle_analyze_parser(sub) -> None:
     """Register ``cycle-analyze`` on an argparse subparsers object."""
     p = sub.add_parser(
         "cycle-analyze",
-        help="compare two groups' cycles: per frame, peak and time to peak of the normal motion",
+        help="the linear model (two groups, or covariates and contrasts) on the transported "
+        "cycles: per frame, peak, time to peak and trajectory",
         description=(
-            "Test two groups' transported cycles (STUDY, the output of 'symladders "
+            "Test the transported cycles of a cycle study (STUDY, the output of 'symladders "
             "cycle-study') on the normal motion (or, with --measure rotation, the rotation "
-            "about the long axis) at every vertex: per frame (FWER over the "
-            "vertices and frames together), and on each vertex's peak and its "
-            "time in the cycle (FWER over the vertices), by permutation. OUTPUT holds "
-            "cycle_vertices.csv, cycle_frames.csv, cycle_tests.vtu and cycle_curves.png."
+            "about the long axis) at every vertex, by the linear model of 'symladders analyze "
+            "--design': two groups (--groups) or a design table with covariates (--design, "
+            "--model, --contrast: t per one-row contrast, F over several levels). Each "
+            "contrast is tested per frame (FWER over the vertices and frames together), on "
+            "each vertex's peak and its time in the cycle, and on its whole trajectory "
+            "(Pillai's trace on its first principal components over the cycle), by "
+            "Freedman-Lane permutations (FWER over the vertices). OUTPUT holds "
+            "cycle_vertices.csv, cycle_frames.csv, cycle_summary.md, cycle_tests.vtu, "
+            "cycle_curves.png and cycle_trajectory.png (and cycle_segments.csv with --aha, "
+            "outcome.csv with --outcome)."
         ),
         formatter_class=DefaultsFormatter,
     )
