@@ -153,13 +153,15 @@ def _num(value: str):
 
 
 def read_comparison(folder: Path) -> dict:
-    """``comparison.csv`` of a ``--deformation both`` folder: (measure, variant, alpha2) -> row."""
+    """``comparison.csv`` of a ``--deformation both`` folder: (measure, variant, alpha2) -> row
+    of SVF against LDDMM (the file's other models left out)."""
     path = Path(folder) / "comparison.csv"
     if not path.is_file():
         raise SystemExit(f"{folder}: no comparison.csv (run `symladders study --deformation both`)")
     return {
         (r["measure"], r["variant"], float(r["alpha2"])): {k: _num(v) for k, v in r.items()}
         for r in _rows(path)
+        if (r["reference"], r["model"]) == ("lddmm", "svf")
     }
 
 
@@ -648,8 +650,8 @@ def svf_table(comparison: dict) -> str:
             for _, m, v in columns:
                 r = comparison.get((m, v, a))
                 cells.append("n/a" if r is None else
-                             f"{g(r['mean_lddmm'])} / {g(r['mean_svf'])} "
-                             f"({pct(r['fraction_svf_lower'])}, p {g(r['wilcoxon_p'], '.2g')})")  # fmt: skip
+                             f"{g(r['mean_reference'])} / {g(r['mean_model'])} "
+                             f"({pct(r['fraction_model_lower'])}, p {g(r['wilcoxon_p'], '.2g')})")  # fmt: skip
             out.append(f"| {a:g} | " + " | ".join(cells) + " |")
         return "\n".join(out)
 

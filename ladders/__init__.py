@@ -4,7 +4,9 @@ Everything here uses only the connection API of :mod:`manifolds` (``exp``,
 ``log``, ``midpoint``, ``symmetry``, ``transvection``), so it runs unchanged on
 every space: the pole ladder and Schild's ladder (one rung driver), the fanning
 scheme, the weighted Fréchet (Karcher) mean, the paper's symmetry errors, log-log
-convergence studies and the ``nabla R`` expansion of transvections.
+convergence studies and the ``nabla R`` expansion of transvections; and the one reader
+of the input tables (:func:`read_table`: CSV files refused, in one line naming the file,
+the line and the column, where they cannot be used).
 
 The paper's application (cohorts, mesh I/O, area strain, the Section 3 study,
 its report and the ``symladders`` command line) lives in :mod:`ladders.study`,
@@ -31,6 +33,7 @@ from .symmetry_errors import (
     symmetry_errors,
     transvectivity_error,
 )
+from .tables import Column, Table, TableDict, TableError, locate, read_table
 from .transvection_expansion import NABLA_R_COEFFICIENTS, transvection_expansion
 
 __all__ = [
@@ -55,4 +58,10 @@ __all__ = [
     "frechet_mean",
     "NABLA_R_COEFFICIENTS",
     "transvection_expansion",
+    "Column",
+    "Table",
+    "TableError",
+    "TableDict",
+    "locate",
+    "read_table",
 ]

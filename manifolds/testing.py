@@ -13,8 +13,10 @@ manifold and ``log`` returns a tangent, the symmetry (fixes its centre, is an
 involution, reverses ``log``), the midpoint, the geodesic, the metric (when the
 space is Riemannian), batching (when it broadcasts), bad-input errors, and,
 for a space claiming ``is_symmetric``, an exact one-rung pole ladder and zero
-transvectivity. Tolerances, sampling sizes and how tangents are compared
-(``tangent_arrays``, ``corrupt_tangent``) are class attributes and hooks to set.
+transvectivity. Tolerances, sampling sizes, where points are drawn
+(``random_point``) and how tangents are compared (``tangent_arrays``,
+``corrupt_tangent``) are class attributes and hooks to set
+(``docs/add_your_own_space.md`` lists them all).
 
 Far from the base point: with ``far_scale > 0`` the centre is first moved by a
 random tangent of size ``far_scale`` (e.g. 6 on the hyperbolic space, where the
@@ -34,6 +36,33 @@ from hypothesis import strategies as st
 from manifolds import ManifoldError, RiemannianManifold
 
 SEEDS = st.integers(min_value=0, max_value=2**32 - 1)
+
+__all__ = ["ConnectionContract", "run_contract", "assert_curvature_matches_distance_expansion"]
+
+
+def run_contract(contract) -> dict[str, str]:
+    """Run every property of a :class:`ConnectionContract` instance outside pytest.
+
+    Returns
+    -------
+    dict
+        ``property -> "passed" | "skipped: why" | "failed: why"`` (the property's name is
+        its test's without ``test_``, underscores as spaces; ``why`` is the first line of
+        the assertion or error).
+    """
+    out = {}
+    for name in sorted(n for n in dir(contract) if n.startswith("test_")):
+        prop = name[len("test_") :].replace("_", " ")
+        try:
+            getattr(contract, name)()
+        except pytest.skip.Exception as exc:
+            out[prop] = f"skipped: {exc}"
+        except Exception as exc:  # an assertion or an error of the space: both fail it
+            first = str(exc).strip().splitlines()
+            out[prop] = f"failed: {type(exc).__name__}: {first[0] if first else ''}".strip()
+        else:
+            out[prop] = "passed"
+    return out
 
 
 def assert_curvature_matches_distance_expansion(space, rng, rtol, sign=None, eps=1e-2):
@@ -77,9 +106,14 @@ class ConnectionContract:
 
         run()
 
+    def random_point(self, rng):
+        """A point to check the properties at: ``space.random_point(rng)`` by default; override
+        it to sample where the space is meant to be used (e.g. shapes near a template)."""
+        return self.space.random_point(rng)
+
     def pair(self, rng):
         """A point and a nearby point reached by a tangent of size ~``tangent_scale``."""
-        a = self.space.random_point(rng)
+        a = self.random_point(rng)
         v = self.space.random_tangent(a, rng, scale=self.tangent_scale)
         return a, self.space.exp(a, v), v
 
@@ -103,7 +137,7 @@ class ConnectionContract:
     # ------------------------------------------------------------- contract
     def test_point_shape(self):
         rng = np.random.default_rng(0)
-        p = self.space.random_point(rng)
+        p = self.random_point(rng)
         assert np.shape(p) == tuple(self.space.point_shape)
         assert np.all(self.space.belongs(p))
 
@@ -123,7 +157,7 @@ class ConnectionContract:
 
     def test_log_at_self_is_zero(self):
         def check(rng):
-            a = self.space.random_point(rng)
+            a = self.random_point(rng)
             for arr in self.tangent_arrays(self.space.log(a, a)):
                 np.testing.assert_allclose(arr, np.zeros_like(arr), atol=self.atol)
 
@@ -131,7 +165,7 @@ class ConnectionContract:
 
     def test_exp_lands_on_manifold(self):
         def check(rng):
-            a = self.space.random_point(rng)
+            a = self.random_point(rng)
             v = self.space.random_tangent(a, rng, scale=self.tangent_scale)
             assert np.all(self.space.belongs(self.space.exp(a, v), atol=self.membership_atol))
 
@@ -147,7 +181,7 @@ class ConnectionContract:
 
     def triple(self, rng):
         """``(T, S, S')``: a template, a shape near it and a shape near the shape."""
-        t = self.space.random_point(rng)
+        t = self.random_point(rng)
         s = self.space.exp(t, self.space.random_tangent(t, rng, scale=self.tangent_scale))
         s2 = self.space.exp(s, self.space.random_tangent(s, rng, scale=self.tangent_scale))
         return t, s, s2
@@ -183,7 +217,7 @@ class ConnectionContract:
 
     def test_symmetry_fixes_center(self):
         def check(rng):
-            a = self.space.random_point(rng)
+            a = self.random_point(rng)
             self.assert_points_close(self.space.symmetry(a, a), a)
 
         self.given_seed(check)
@@ -287,7 +321,7 @@ class ConnectionContract:
     # ------------------------------------------------------------- far from the base point
     def far_triple(self, rng):
         """``(m, p, v)``: a centre ``m`` at ~``far_scale`` from a random point, ``p = Exp_m(v)``."""
-        a = self.space.random_point(rng)
+        a = self.random_point(rng)
         m = self.space.exp(a, self.space.random_tangent(a, rng, scale=self.far_scale))
         v = self.space.random_tangent(m, rng, scale=self.tangent_scale)
         return m, self.space.exp(m, v), v

@@ -110,7 +110,7 @@ def test_the_atlas_with_the_landmark_table_carries_its_landmarks(session):
     """The folder's landmarks.csv aligns the subjects; the atlas's own landmarks are written
     beside it, on its surface, and 'correspond' finds them there."""
     from ladders.study.preparation import read_landmarks
-    from ladders.study.preparation.landmarks import check_landmarks
+    from ladders.study.preparation.landmarks import check_landmarks, write_landmarks
 
     root, cohort = session[0], session[1]
     status, out, err = run_cli("atlas", "--meshes", root / "seg", "-o", root / "lm" / "atlas.vtk",
@@ -120,12 +120,16 @@ def test_the_atlas_with_the_landmark_table_carries_its_landmarks(session):
     assert template_distance(v, f, cohort, align=True) < mean_subject_distance(cohort)
     atlas_lm = read_landmarks(root / "lm" / "atlas_landmarks.csv")["atlas"]
     check_landmarks(atlas_lm, v, f, 1e-6, "atlas")  # apex and septum on the surface
-    table = read_landmarks(root / "seg" / "landmarks.csv")
+    table = dict(read_landmarks(root / "seg" / "landmarks.csv"))
     del table["atlas"]
-    (root / "lm" / "subjects.csv").write_text(
-        "subject,apex_x,apex_y,apex_z,base_x,base_y,base_z,septum_x,septum_y,septum_z\n"
-    )
-    status, out, err = run_cli("correspond", "--atlas", root / "lm" / "atlas.vtk", "--meshes",
-                               root / "seg", "-o", root / "lm" / "out", "--units", "auto",
-                               "--landmarks", root / "lm" / "subjects.csv", "--no-progress")  # fmt: skip
-    assert status == 2 and "--landmarks" in err and "no row for subject" in err, err
+    first = next(iter(table))
+    argv = ("correspond", "--atlas", root / "lm" / "atlas.vtk", "--meshes", root / "seg",
+            "-o", root / "lm" / "out", "--units", "auto", "--landmarks", root / "lm" / "subjects.csv",
+            "--no-progress")  # fmt: skip
+    write_landmarks(root / "lm" / "subjects.csv", {k: v for k, v in table.items() if k != first})
+    status, out, err = run_cli(*argv)
+    assert status == 2 and "--landmarks" in err and f"no row for subject(s) ['{first}']" in err, err
+    write_landmarks(root / "lm" / "subjects.csv", {**table, "case99": table[first]})
+    status, out, err = run_cli(*argv)
+    assert status == 2 and "unknown subject 'case99'" in err, err
+    assert f"line {len(table) + 2}, column 'subject'" in err, err  # the line named

@@ -47,12 +47,12 @@ def test_label_series_render_the_true_frames(cycles, tmp_path):
 def test_valve_planes_are_the_true_rims_and_the_track_table(cycles, tmp_path):
     """``valve_planes.csv``: every frame's rim lies on its plane, the normal points away
     from the apex, the plane descends in systole, and the table is ``--cut-planes``'s."""
-    from ladders.study.cli.track_cli import _read_planes
+    from ladders.study.imaging.plane_table import planes_by_image, read_plane_table
     from ladders.study.population import cycle_valve_planes, valve_planes
     from ladders.study.volume import boundary_vertices
 
     folder = write_cycle_cohort(cycles, tmp_path, "none", 1.5, 8.0, frames=False)
-    table = _read_planes(folder / "valve_planes.csv")
+    table = planes_by_image(read_plane_table(folder / "valve_planes.csv"))
     assert list(table) == list(cycles.names)
     given = cycle_valve_planes(cycles)  # what track_cohort takes in Python
     assert list(given) == list(table)
@@ -111,7 +111,7 @@ def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, cap
     assert len(list((out / "images").glob("*.nii.gz"))) == 6
     assert json.loads((out / "cycle.json").read_text())["voxel_mm"] == [2.0, 2.0, 6.0]
     for extra, message in ((["--pose"], "--pose: not with --cycle"),
-                           (["--design"], "--design: not with --cycle"),
+                           (["--remesh", "2"], "--remesh: not with --cycle"),
                            (["--ext", "ply"], "--ext: not with --cycle"),
                            (["--noise-length", "5"], "--noise-length: not with --cycle"),
                            (["--tagging"], "--tagging: only with --images cine"),

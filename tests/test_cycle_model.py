@@ -237,7 +237,10 @@ def test_cli_covariate_cycle_cohort_then_the_model_and_bad_input(tmp_path, capsy
     bad.write_text((cohort / "design.csv").read_text() + "stranger,controls,60,F,1.0,3,1\n")
     assert main([*base, "--contrast", "group", "--design", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and f"{bad}, line 14: subject 'stranger' not in the cycle study" in err
+    assert "\n" not in err and (
+        f"design table {bad}, line 14, column 'subject': unknown subject 'stranger', not in the "
+        "cycle study" in err
+    )
     assert main([*base, "--contrast", "weight"]) == 2
     err = capsys.readouterr().err.strip()
     assert "design.csv: --contrast 'weight': unknown term 'weight'" in err and "\n" not in err

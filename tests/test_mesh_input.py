@@ -163,7 +163,7 @@ def test_study_on_vtk_vtu_and_vtp_folders(tmp_path, reference, kind):
 def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
     data = tmp_path / "data"
     (data / "scans").mkdir(parents=True)
-    rows = ["Subject,ES,ED,notes"]  # any column order and case, extra columns ignored
+    rows = ["Subject,ES,ED"]  # any column order and case
     for i, s in enumerate(reversed(COHORT.subjects)):
         meshio.write(
             data / "scans" / f"frame0_{i}.vtu", meshio.Mesh(s.ed, [("triangle", COHORT.faces)])
@@ -171,7 +171,7 @@ def test_cohort_table_and_atlas_option(tmp_path, reference, capsys):
         (data / "scans" / f"frame9_{i}.vtp").write_bytes(
             vtp_bytes(s.es, COHORT.faces, points_type="f8")
         )
-        rows.append(f"{s.name},scans/frame9_{i}.vtp,{data / 'scans' / f'frame0_{i}.vtu'},x")
+        rows.append(f"{s.name},scans/frame9_{i}.vtp,{data / 'scans' / f'frame0_{i}.vtu'}")
     (data / "cohort.csv").write_text("\n".join(rows) + "\n")
     template = tmp_path / "template.ply"
     meshio.write(template, meshio.Mesh(COHORT.atlas, [("triangle", COHORT.faces)]))
@@ -221,23 +221,24 @@ def test_atlas_option_on_a_folder_warns_about_the_folder_atlas(tmp_path):
 @pytest.mark.parametrize(
     ("table", "message"),
     [
-        ("subject,ed\na,x.vtu\n", r"missing column\(s\) \['es'\]"),
+        ("subject,ed\na,x.vtu\n", r"line 1: missing column 'es'"),
         (
             "subject,ed,es\na,a_ed.vtu,nothing.vtu\n",
-            r"line 2: 'es' file .*nothing\.vtu does not exist",
+            r"line 2, column 'es': .*nothing\.vtu does not exist",
         ),
         (
             "subject,ed,es\na,a_ed.vtu,a_es.vtu\na,a_ed.vtu,a_es.vtu\n",
-            r"line 3: subject 'a' is listed twice",
+            r"line 3, column 'subject': a second row for subject 'a' \(the first is line 2\)",
         ),
-        ("subject,ed,es\n,a_ed.vtu,a_es.vtu\n", "line 2: empty subject name"),
+        ("subject,ed,es\n,a_ed.vtu,a_es.vtu\n", "line 2, column 'subject': empty value"),
         ("subject,ed,es\n../a,a_ed.vtu,a_es.vtu\n", "must not be a path"),
         (
             "subject,ed,es\na,a_ed.txt,a_es.vtu\n",
-            r"line 2: 'ed' file .*a_ed\.txt has an unsupported extension",
+            r"line 2, column 'ed': .*a_ed\.txt has an unsupported extension",
         ),
-        ("subject,ed,es\na,a_ed.vtu\n", "line 2: 2 values for 3 columns"),
-        ("subject,ed,es\n", "no subject rows"),
+        ("subject,ed,es\na,a_ed.vtu\n", "line 2, column 'es': empty value"),
+        ("subject,ed,es,site\na,a_ed.vtu,a_es.vtu,x\n", "line 1, column 'site': not used"),
+        ("subject,ed,es\n", "no data row"),
     ],
 )
 def test_cohort_table_errors_name_the_table_and_line(tmp_path, table, message):

@@ -124,15 +124,19 @@ def test_landmark_table_round_trip_and_bad_input(tmp_path):
     assert np.allclose(back["case01"].as_array(), table["case01"].as_array())
     text = path.read_text().splitlines()
     (tmp_path / "dup.csv").write_text("\n".join([*text, text[-1]]) + "\n")
-    with pytest.raises(LandmarkError, match="'case01' appears twice"):
+    with pytest.raises(
+        LandmarkError, match="line 4, column 'subject': a second row for subject 'case01'"
+    ):
         read_landmarks(tmp_path / "dup.csv")
     (tmp_path / "nan.csv").write_text(text[0] + "\n" + text[1].replace("85", "x") + "\n")
-    with pytest.raises(LandmarkError, match="base_z: expected a finite number, got 'x'"):
+    with pytest.raises(
+        LandmarkError, match="line 2, column 'base_z': expected a finite number, got 'x'"
+    ):
         read_landmarks(tmp_path / "nan.csv")
     (tmp_path / "col.csv").write_text("subject,apex_x\na,1\n")
     with pytest.raises(LandmarkError, match="missing column"):
         read_landmarks(tmp_path / "col.csv")
-    with pytest.raises(LandmarkError, match="cannot read"):
+    with pytest.raises(LandmarkError, match="cannot be read"):
         read_landmarks(tmp_path / "absent.csv")
 
 

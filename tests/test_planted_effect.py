@@ -161,12 +161,13 @@ def test_groups_table_round_trip_and_errors(tmp_path):
     path = tmp_path / "g.csv"
     path.write_text(groups_csv(groups))
     assert read_groups(path) == groups
-    path.write_text("Subject,Group,age\nx,A,3\ny,B,4\n")
+    path.write_text("Subject, Group\nx,A\ny,B\n")  # any letter case, spaces
     assert read_groups(path) == {"x": "A", "y": "B"}
     for text, match in [
-        ("subject,kind\nx,A\n", "missing column"),
-        ("subject,group\nx,A\nx,B\n", "twice"),
-        ("subject,group\nx,\n", "empty"),
+        ("subject,kind\nx,A\n", "line 1: missing column 'group'"),
+        ("Subject,Group,age\nx,A,3\n", "line 1, column 'age': not used"),
+        ("subject,group\nx,A\nx,B\n", "line 3, column 'subject': a second row for subject 'x'"),
+        ("subject,group\nx,\n", "line 2, column 'group': empty value"),
         ("", "empty"),
     ]:
         path.write_text(text)

@@ -321,7 +321,8 @@ def test_the_command_tracks_and_names_the_broken_subject(tmp_path, subject):
     write_label_image(images / "flat.nii.gz", subject["labels"][0], subject["affine"])
     table = tmp_path / "planes.csv"
     table.write_text("image,frame,x,y,z,nx,ny,nz\n" + "".join(
-        f"good,{t},{','.join(str(x) for x in p)}\n" for t, p in subject["planes"].items()))  # fmt: skip
+        f"good,{t},{','.join(str(x) for x in p)}\n" for t, p in subject["planes"].items()
+        if int(t) < 3))  # fmt: skip
     argv = ("track", meshes, images, "--label", 1, "-o", out, "--vertices", 800,
             "--cut-planes", table, "--jobs", 1, "--no-progress")  # fmt: skip
     status, stdout, stderr = run_cli(*argv)

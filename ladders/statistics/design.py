@@ -18,13 +18,14 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from formulaic import Formula, model_matrix
 from scipy import linalg
+
+from ladders.tables import Column, TableDict, read_table
 
 __all__ = ["Design", "design_matrix", "contrast_matrix", "read_design"]
 
@@ -354,17 +355,16 @@ def contrast_matrix(design: Design, spec) -> tuple[str, np.ndarray]:
 def read_design(path) -> dict[str, list]:
     """The table of a CSV file (a header line; one row per subject) as a dict of columns.
 
+    Read by :func:`ladders.tables.read_table`: a ``subject`` column, each subject once,
+    and any covariates (kept as text; :func:`design_matrix` reads the numbers). The dict
+    is a :class:`~ladders.tables.TableDict`: a later check names the line of a subject.
+
     Raises
     ------
-    ValueError
-        Naming the path when it cannot be read or parsed, or has no ``subject`` column.
+    ladders.tables.TableError
+        A ``ValueError`` naming the file, the line and the column: an unreadable file, no
+        ``subject`` column, an empty or repeated subject, a row longer than the header.
     """
-    path = Path(path)
-    try:
-        frame = pd.read_csv(path, dtype=str, keep_default_na=False, skipinitialspace=True)
-    except (OSError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as e:
-        raise ValueError(f"{path}: cannot read the design table ({e})") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
-    if "subject" not in frame.columns:
-        raise ValueError(f"{path}: no 'subject' column (columns: {', '.join(frame.columns)})")
-    return {name: list(frame[name]) for name in frame.columns}
+    table = read_table(path, (Column("subject"),), what="design table", key=("subject",),
+                       extra=True)  # fmt: skip
+    return TableDict(((name, table.column(name)) for name in table.columns), table)

@@ -8,13 +8,17 @@ Sub-packages, by concern:
   (:func:`make_synthetic_cohort`), mesh folders (:func:`read_cohort`), cohort tables
   (:func:`read_cohort_table`), cohort figures and the registration benchmark's shapes
   (:func:`bent_ellipsoid`);
+- :mod:`.deformations`: the deformation models the study runs on
+  (:class:`DeformationModel`, the built-in ``lddmm`` and ``svf``, any a user
+  registers with :func:`register_deformation`) and their checks
+  (:func:`validate_deformation_model`);
 - :mod:`.running`: the study's computation (:class:`StudyConfig`, :func:`compute_pair`,
   the one computation of a (subject, ``alpha^2``) pair, and :func:`run_subject`), its
   typed results (:class:`PairResult`, :class:`SubjectResults`), the runner with its
   resumable store (:func:`run_study`) and the manifest;
 - :mod:`.reporting`: the report (:func:`summarize`, :func:`write_report`,
-  :func:`tidy_rows`, :func:`paired_statistics`), the figures and the LDDMM-SVF
-  comparison;
+  :func:`tidy_rows`, :func:`paired_statistics`), the figures and the comparison
+  of deformation models;
 - :mod:`.cli`: the ``symladders`` command line.
 
 Beside them: local area strain (:func:`area_strain`, :func:`area_strain_error`),
@@ -42,6 +46,17 @@ from .cohort import (
     read_cohort,
     read_cohort_table,
     write_cohort,
+)
+from .deformations import (
+    DeformationModel,
+    DeformationModelError,
+    Registration,
+    Transported,
+    check_deformation_model,
+    deformation_model,
+    deformation_names,
+    register_deformation,
+    validate_deformation_model,
 )
 from .meshes import (
     MESH_EXTENSIONS,
@@ -110,6 +125,15 @@ __all__ = [
     "bent_ellipsoid",
     "ERROR_NAMES",
     "VARIANTS",
+    "DeformationModel",
+    "DeformationModelError",
+    "Registration",
+    "Transported",
+    "check_deformation_model",
+    "deformation_model",
+    "deformation_names",
+    "register_deformation",
+    "validate_deformation_model",
     "StudyConfig",
     "run_subject",
     "run_study",

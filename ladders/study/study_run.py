@@ -2,8 +2,10 @@
 
 ``run(StudyConfig(...), cohort, output)`` checks the configuration against the
 cohort before any registration (a kernel width in another unit than the meshes,
-:func:`~ladders.study.running.preflight.check_sigma`; every field of
-:class:`~ladders.study.running.pipeline.StudyConfig` is checked when it is built),
+:func:`~ladders.study.running.preflight.check_sigma`; the deformation model's
+interface on the atlas, :func:`~ladders.study.deformations.check_deformation_model`;
+every field of :class:`~ladders.study.running.pipeline.StudyConfig` is checked when
+it is built),
 runs or resumes the study (:func:`~ladders.study.running.runner.run_study`) and
 writes its report (:func:`~ladders.study.reporting.write_report`).
 """
@@ -14,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .cohort import Cohort, make_synthetic_cohort
+from .deformations import check_deformation_model
 from .reporting import write_report
 from .running import StudyConfig, run_study
 from .running.preflight import check_sigma
@@ -72,10 +75,13 @@ def run(
     ------
     manifolds.errors.ManifoldError
         The kernel width cannot be in the meshes' unit (before any registration).
+    ladders.study.deformations.DeformationModelError
+        The deformation model breaks the interface (one line naming it and the property).
     """
     config = StudyConfig() if config is None else config
     cohort = make_synthetic_cohort(DEFAULT_SUBJECTS) if cohort is None else cohort
     check_sigma(cohort.atlas, config.registration)
+    check_deformation_model(config.model, cohort.atlas, config.registration)
     output = Path(output)
     outcome = run_study(
         config, cohort.atlas, cohort.faces, cohort.subjects, output, jobs=jobs,

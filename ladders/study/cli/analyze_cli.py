@@ -15,10 +15,15 @@ from .cli_types import (
     UsageError,
     existing_file,
     existing_folder,
-    nonnegative_int,
-    output_folder,
-    positive_float,
     positive_int,
+)
+from .common_arguments import (
+    RECOMMENDED_ALPHA2,
+    add_alpha2,
+    add_no_progress,
+    add_output,
+    add_permutations,
+    add_seed,
 )
 from .model_arguments import add_model_arguments, model_request, print_outcome
 
@@ -57,12 +62,13 @@ def add_analyze_parser(sub) -> None:
                    help="planted_region.json of a synthetic cohort ('symladders cohort')")  # fmt: skip
     p.add_argument("--null", type=existing_folder, default=None, metavar="NULL_STUDY",
                    help="study of the same subjects without the effect (with --truth)")  # fmt: skip
-    p.add_argument("--alpha2", type=positive_float, nargs="+", default=None,
-                   help="alpha^2 values to analyse (default: all of the study)")  # fmt: skip
+    add_alpha2(p, None, "alpha^2 values to analyse (default: every one of the study); the "
+                        "main motion (the terminal's line, the figures) is the pole ladder with "
+                        f"residuals at the study's alpha^2 nearest {RECOMMENDED_ALPHA2:g}, the "
+                        "value for group statistics (docs/population.md)")  # fmt: skip
     p.add_argument("--transport", nargs="+", default=None,
                    help="transport methods to analyse, e.g. pole_ladder_residual fanning none")  # fmt: skip
-    p.add_argument("--permutations", type=positive_int, default=10000,
-                   help="permutations of the group labels per test")  # fmt: skip
+    add_permutations(p)
     p.add_argument("--components", type=positive_int, default=5,
                    help="PCA scores of the global test and the classifier")  # fmt: skip
     p.add_argument("--normalize", choices=("none", "volume"), default="none",
@@ -70,11 +76,10 @@ def add_analyze_parser(sub) -> None:
                         "each subject's relative volume change (ejection fraction)")  # fmt: skip
     p.add_argument("--null-repetitions", type=positive_int, default=200,
                    help="random splits of the null study")  # fmt: skip
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every random draw")
-    p.add_argument("--output", "-o", type=output_folder, default=None,
-                   help="analysis folder (default STUDY_OUTPUT/analysis)")  # fmt: skip
+    add_seed(p)
+    add_output(p, None, "analysis folder (default: STUDY_OUTPUT/analysis)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    add_no_progress(p)
     p.set_defaults(run=run_analyze_command, output_is_file=False)
 
 

@@ -22,6 +22,7 @@ from .cli_types import (
     positive_float,
     positive_int,
 )
+from .common_arguments import add_batch_arguments, add_output, parallel_backend
 from .preparation_arguments import (
     add_data_term_arguments,
     add_landmark_arguments,
@@ -64,12 +65,11 @@ def add_atlas_parser(sub) -> None:
         help="folder of meshes: <name>_ed.<ext> (or <name>/ed.<ext>), any vertex count; ES "
         "meshes and an atlas.<ext> there are not used",
     )
-    p.add_argument(
-        "--output",
-        "-o",
-        type=mesh_output_file,
-        default="symladders-output/atlas.vtk",
-        help="the atlas's file; the extension chooses the format (vtk, vtu, ply, obj, off, stl)",
+    add_output(
+        p,
+        "symladders-output/atlas.vtk",
+        "the atlas's file; the extension chooses the format (vtk, vtu, ply, obj, off, stl)",
+        file_type=mesh_output_file,
     )
     p.add_argument(
         "--start",
@@ -99,7 +99,7 @@ def add_atlas_parser(sub) -> None:
         help="iteration limit",
     )  # fmt: skip
     add_units_arguments(p, reference="that of the mesh of median size (taken to be in mm)")
-    p.add_argument("--no-progress", action="store_true", help="no line per iteration")
+    add_batch_arguments(p)
     p.set_defaults(run=run_atlas_command, output_is_file=True)
 
 
@@ -134,12 +134,13 @@ def run_atlas_command(args) -> int:
     for name, reason in inputs.skipped.items():
         print(f"symladders atlas: warning: {name} left out: {reason}", file=sys.stderr)
     try:
-        run = build_atlas(
-            args.meshes, args.output, correspondence_settings(args), start=args.start,
-            term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
-            progress=None if args.no_progress else _progress,
-            landmarks=landmarks_argument(args, args.meshes),
-        )  # fmt: skip
+        with parallel_backend(args, "atlas"):
+            run = build_atlas(
+                args.meshes, args.output, correspondence_settings(args), start=args.start,
+                term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
+                progress=None if args.no_progress else _progress,
+                landmarks=landmarks_argument(args, args.meshes),
+            )  # fmt: skip
     except AtlasInterrupted as exc:
         args.on_interrupt = exc.message
         raise

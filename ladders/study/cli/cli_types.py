@@ -43,6 +43,9 @@ __all__ = [
     "positive_float",
     "output_folder",
     "existing_folder",
+    "existing_file",
+    "nonnegative_float",
+    "checks_files",
     "scheduler_address",
     "log_internal_error",
     "check_sigma",
@@ -103,6 +106,24 @@ class DefaultsFormatter(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+def checks_files(syntax):
+    """Mark an argparse type that looks at the file system or the network with ``syntax``,
+    the check of its value's form alone (``type.syntax``): a command written in the docs,
+    with placeholders for its files, is parsed with it (tests/test_docs_commands.py)."""
+
+    def mark(function):
+        function.syntax = syntax
+        return function
+
+    return mark
+
+
+def _path_syntax(text: str) -> Path:
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError("expected a path, got an empty string")
+    return Path(text)
+
+
 def _integer(text: str) -> int:
     try:
         return int(str(text).strip())
@@ -158,6 +179,7 @@ def nonnegative_float(text: str) -> float:
     return value
 
 
+@checks_files(lambda text: str(_path_syntax(text)) and str(text))
 def output_folder(text: str) -> str:
     """A writable folder, or a path where one can be created (not a file).
 
@@ -186,6 +208,7 @@ def output_folder(text: str) -> str:
     return str(text)
 
 
+@checks_files(_path_syntax)
 def existing_file(text: str) -> Path:
     """An argparse type: a path to an existing file (not a folder)."""
     path = Path(text).expanduser()
@@ -195,6 +218,7 @@ def existing_file(text: str) -> Path:
     return path
 
 
+@checks_files(_path_syntax)
 def existing_folder(text: str) -> Path:
     """An existing folder (e.g. of meshes)."""
     path = Path(text).expanduser()
@@ -204,12 +228,7 @@ def existing_folder(text: str) -> Path:
     return path
 
 
-def scheduler_address(text: str, timeout: float = 3.0) -> str:
-    """A reachable Dask scheduler address ``[tcp://]host:port``.
-
-    The address is parsed and a TCP connection is attempted (``timeout``
-    seconds), so that a typo or a stopped scheduler is reported at once.
-    """
+def _host_port(text: str) -> tuple[str, int]:
     url = urlsplit(text if "://" in text else f"tcp://{text}")
     try:
         host, port = url.hostname, url.port
@@ -219,6 +238,17 @@ def scheduler_address(text: str, timeout: float = 3.0) -> str:
         raise argparse.ArgumentTypeError(
             f"expected a scheduler address such as tcp://host:8786, got {text!r}"
         )
+    return host, port
+
+
+@checks_files(lambda text: _host_port(text) and text)
+def scheduler_address(text: str, timeout: float = 3.0) -> str:
+    """A reachable Dask scheduler address ``[tcp://]host:port``.
+
+    The address is parsed and a TCP connection is attempted (``timeout``
+    seconds), so that a typo or a stopped scheduler is reported at once.
+    """
+    host, port = _host_port(text)
     try:
         with socket.create_connection((host, port), timeout=timeout):
             pass

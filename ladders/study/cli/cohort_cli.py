@@ -18,8 +18,9 @@ from __future__ import annotations
 
 import argparse
 
-from .cli_types import DefaultsFormatter, UsageError, nonnegative_int, output_folder, positive_int
+from .cli_types import DefaultsFormatter, UsageError, positive_int
 from .cohort_cycle_cli import ED_ES_DEFAULTS, add_cycle_arguments, run_cycle_cohort
+from .common_arguments import MESH_FORMATS, add_no_progress, add_output, add_seed
 from .covariate_arguments import covariate_data, print_covariate_cohort, several_groups
 
 __all__ = ["add_cohort_parser", "run_cohort_command"]
@@ -124,8 +125,7 @@ def add_cohort_parser(sub) -> None:
         ),
         formatter_class=DefaultsFormatter,
     )
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/cohort",
-                   help="folder to write")  # fmt: skip
+    add_output(p, "symladders-output/cohort", "folder to write")
     p.add_argument("--subjects", type=positive_int, default=40, help="number of subjects")
     p.add_argument("--patients", type=_fraction, default=0.5,
                    help="fraction of the subjects in the patients' group")  # fmt: skip
@@ -190,8 +190,9 @@ def add_cohort_parser(sub) -> None:
     g.add_argument("--design", action="store_true",
                    help="write design.csv with the default covariates even without the options above")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of every draw")
-    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"),
+    add_seed(p)
+    add_no_progress(p)
+    p.add_argument("--ext", choices=MESH_FORMATS,
                    default=ED_ES_DEFAULTS["ext"],
                    help="mesh format")  # fmt: skip
     add_cycle_arguments(p)

@@ -110,7 +110,8 @@ def run_cycle_cohort(args, abnormality) -> int:
             cycles = covariate_cycles(data, args.cycle, 0.35)
         folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
                                     tagging=_tag_grid(args.tagging),
-                                    landmarks=args.landmarks)  # fmt: skip
+                                    landmarks=args.landmarks,
+                                    progress=not args.no_progress)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
     size = f"through {args.cycle} frames, {cycles.frames.shape[2]} vertices"

@@ -13,14 +13,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .cli_types import (
-    DefaultsFormatter,
-    UsageError,
-    existing_folder,
-    jobs_count,
-    output_folder,
-    positive_float,
-)
+from .cli_types import DefaultsFormatter, UsageError, existing_folder, positive_float
+from .common_arguments import MESH_FORMATS, add_batch_arguments, add_output, parallel_backend
 from .preparation_arguments import (
     add_data_term_arguments,
     add_landmark_arguments,
@@ -39,7 +33,6 @@ _SHOWN = 10  # flagged meshes named in the last line
 
 def add_correspond_parser(sub) -> None:
     """Register the ``correspond`` subcommand on an argparse subparsers object."""
-    from ..meshes import WRITE_EXTENSIONS
     from ..preparation import CorrespondenceSettings
 
     p = sub.add_parser(
@@ -68,16 +61,10 @@ def add_correspond_parser(sub) -> None:
         help="folder of segmentations: <name>_ed.<ext> and <name>_es.<ext> (or <name>/ed.<ext>, "
         "<name>/es.<ext>), any vertex count; PLY/OBJ/STL/OFF/VTK/VTU/VTP",
     )
-    p.add_argument(
-        "--output",
-        "-o",
-        type=output_folder,
-        default="symladders-output/corresponded",
-        help="folder of the corresponded meshes",
-    )
+    add_output(p, "symladders-output/corresponded", "folder of the corresponded meshes")
     p.add_argument(
         "--ext",
-        choices=[e.lstrip(".") for e in WRITE_EXTENSIONS],
+        choices=MESH_FORMATS,
         default=None,
         help="format of the written meshes (default: the atlas's, vtk when it is not written)",
     )
@@ -133,11 +120,8 @@ def add_correspond_parser(sub) -> None:
 
 
 def _add_run_arguments(p) -> None:
-    """Flags of the execution: workers, progress, resume."""
-    p.add_argument(
-        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
-    )
-    p.add_argument("--no-progress", action="store_true", help="no line per subject")
+    """Flags of the execution: workers, progress, backend, resume."""
+    add_batch_arguments(p)
     p.add_argument(
         "--no-resume",
         action="store_true",
@@ -215,13 +199,14 @@ def run_correspond_command(args) -> int:
     )
     args.on_interrupt = f"the subjects done are kept in {output}; rerun the command to resume"
     try:
-        outcome = correspond_cohort(
-            args.atlas, entries, output, settings, jobs=args.jobs,
-            progress=None if args.no_progress else _progress, resume=not args.no_resume,
-            units=args.units, allow_scale=args.allow_scale,
-            allow_pose=True if args.allow_pose else None, ext=args.ext, landmarks=landmarks,
-            atlas_landmarks=args.atlas_landmarks,
-        )  # fmt: skip
+        with parallel_backend(args, "correspond"):
+            outcome = correspond_cohort(
+                args.atlas, entries, output, settings, jobs=args.jobs,
+                progress=None if args.no_progress else _progress, resume=not args.no_resume,
+                units=args.units, allow_scale=args.allow_scale,
+                allow_pose=True if args.allow_pose else None, ext=args.ext, landmarks=landmarks,
+                atlas_landmarks=args.atlas_landmarks,
+            )  # fmt: skip
     except UnitsError as exc:
         raise units_usage_error("correspond", exc) from None
     except LandmarkError as exc:

@@ -18,11 +18,9 @@ from .cli_types import (
     UsageError,
     existing_file,
     existing_folder,
-    nonnegative_int,
-    output_folder,
     positive_float,
-    positive_int,
 )
+from .common_arguments import add_no_progress, add_output, add_permutations, add_seed
 from .model_arguments import add_model_arguments, model_request, print_outcome
 
 __all__ = ["add_cycle_analyze_parser", "run_cycle_analyze_command"]
@@ -71,15 +69,15 @@ def add_cycle_analyze_parser(sub) -> None:
         ),
         formatter_class=DefaultsFormatter,
     )
-    p.add_argument("study", type=existing_folder, metavar="STUDY")
+    p.add_argument("study", type=existing_folder, metavar="STUDY",
+                   help="folder written by 'symladders cycle-study'")  # fmt: skip
     p.add_argument("--groups", type=existing_file, default=None,
                    help="CSV table with the columns subject and group: two groups compared "
                         "(the model 'group'; instead of --design)")  # fmt: skip
     add_model_arguments(p, "tables per AHA segment (cycle_segments.csv), and the segments of "
                            "--exclude-segments and the long axis of --measure rotation")  # fmt: skip
-    p.add_argument("--permutations", type=positive_int, default=5000,
-                   help="permutations per test")  # fmt: skip
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the permutations")
+    add_permutations(p)
+    add_seed(p)
     p.add_argument("--measure", choices=("normal", "rotation"), default="normal",
                    help="the curve tested per vertex: the normal motion (mm), or the rotation "
                         "about the long axis (degrees, counter-clockwise seen from the apex; "
@@ -95,9 +93,8 @@ def add_cycle_analyze_parser(sub) -> None:
                    help="the summaries of each vertex's curve tested: per_frame, peak, "
                         "time_to_peak, trajectory")  # fmt: skip
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--output", "-o", type=output_folder, default=None,
-                   help="folder of the results (default: STUDY/analysis)")  # fmt: skip
+    add_no_progress(p)
+    add_output(p, None, "analysis folder (default: STUDY/analysis)")
     p.set_defaults(run=run_cycle_analyze_command, output_is_file=False)
     p.__class__ = _LegacyCompareParser
 

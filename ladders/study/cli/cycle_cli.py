@@ -13,12 +13,12 @@ import sys
 from .cli_types import (
     DefaultsFormatter,
     UsageError,
-    existing_file,
     existing_folder,
-    jobs_count,
-    output_folder,
     positive_float,
 )
+from .common_arguments import RECOMMENDED_ALPHA2, add_batch_arguments, add_output, parallel_backend
+from .plugin_arguments import add_plugin_argument, one_deformation, registered_names
+from .preparation_arguments import mesh_file
 
 __all__ = ["add_cycle_study_parser", "run_cycle_study_command"]
 
@@ -42,16 +42,20 @@ def add_cycle_study_parser(sub) -> None:
     )
     p.add_argument("frames", type=existing_folder, metavar="FRAMES",
                    help="folder of <subject>/frame_<kk>.<ext> meshes")  # fmt: skip
-    p.add_argument("--atlas", type=existing_file, required=True,
+    p.add_argument("--atlas", type=mesh_file, required=True,
                    help="the atlas mesh (the frames' vertex correspondence)")  # fmt: skip
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/cycle_study",
-                   help="the study's folder")  # fmt: skip
-    p.add_argument("--alpha2", type=positive_float, default=1.0,
-                   help="the regularisation alpha^2 of the registrations (eq. 3)")  # fmt: skip
-    p.add_argument("--deformation", choices=("lddmm", "svf"), default="lddmm")
+    add_output(p, "symladders-output/cycle_study", "the study's folder")
+    p.add_argument("--alpha2", type=positive_float, default=RECOMMENDED_ALPHA2, metavar="A",
+                   help="the regularisation alpha^2 of the registrations (eq. 3): one value, the "
+                        "one for group statistics (docs/population.md, 'Which to use when': "
+                        "never an LDDMM transport at small alpha^2)")  # fmt: skip
+    p.add_argument("--deformation", type=one_deformation, default="lddmm", metavar="NAME",
+                   help="deformation model of the registrations and the pole ladder, a "
+                        "registered name (" + ", ".join(registered_names())
+                   + "; a model of your own: --plugin)")  # fmt: skip
+    add_plugin_argument(p)
     p.add_argument("--sigma", type=positive_float, default=10.0, help="kernel width (mm)")
-    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects in parallel")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_batch_arguments(p)
     p.set_defaults(run=run_cycle_study_command, output_is_file=False)
 
 
@@ -64,9 +68,10 @@ def run_cycle_study_command(args) -> int:
     sequences = read_tracked_frames(args.frames)
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
     try:
-        outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
-                                  deformation=args.deformation, jobs=args.jobs,
-                                  progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
+        with parallel_backend(args, "cycle-study"):
+            outcome = run_cycle_study(atlas, faces, sequences, args.output, alpha2=args.alpha2,
+                                      deformation=args.deformation, jobs=args.jobs,
+                                      progress=not args.no_progress, sigma=args.sigma)  # fmt: skip
     except ValueError as exc:  # a bad atlas
         raise UsageError(f"symladders cycle-study: error: {exc}") from None
     print(

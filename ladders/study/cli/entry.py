@@ -31,6 +31,7 @@ from .correspond_cli import add_correspond_parser
 from .cycle_analyze_cli import add_cycle_analyze_parser
 from .cycle_cli import add_cycle_study_parser
 from .mesh_cli import add_mesh_parser
+from .plugin_arguments import preload_plugins
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
@@ -66,22 +67,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     standard error without a traceback; 3 for an internal error, reported as
     one line saying where the full traceback was written; 130 if interrupted.
     """
+    from ladders.tables import TableError
     from manifolds.errors import ManifoldError
 
     from ..errors import CohortError
 
-    parser = build_parser()
     command = "symladders"
     args = None
     try:
-        args = parser.parse_args(argv)
+        preload_plugins(sys.argv[1:] if argv is None else argv)
+        args = build_parser().parse_args(argv)
         command = f"symladders {args.command}"
         return args.run(args)
     except BrokenPipeError:
         return _closed_pipe()
     except UsageError as exc:
         return _fail(str(exc), EXIT_USAGE)
-    except (CohortError, ManifoldError) as exc:
+    except (CohortError, ManifoldError, TableError) as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)
     except OSError as exc:
         return _fail(f"{command}: error: {exc}", EXIT_USAGE)

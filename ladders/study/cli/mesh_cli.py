@@ -11,28 +11,35 @@ import argparse
 import sys
 from pathlib import Path
 
-from .cli_types import (
-    DefaultsFormatter,
-    UsageError,
-    jobs_count,
-    nonnegative_float,
-    nonnegative_int,
-    output_folder,
+from .cli_types import DefaultsFormatter, UsageError, nonnegative_float, nonnegative_int
+from .common_arguments import (
+    MESH_FORMATS,
+    add_batch_arguments,
+    add_cut_planes,
+    add_output,
+    parallel_backend,
+    read_cut_planes,
+    table_usage_error,
 )
 
 __all__ = ["add_mesh_parser", "run_mesh_command"]
 
 
-def _frames(text: str) -> tuple[int, int]:
-    try:
-        values = tuple(int(t) for t in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 2 or min(values) < 0:
+def _frames(text: str) -> tuple[int, int] | Path:
+    """``ED,ES`` (two frame indices, 0-based) or the path of a frames table."""
+    parts = [t.strip() for t in str(text).split(",")]
+    if len(parts) == 2 and all(p.lstrip("-").isdigit() for p in parts):
+        values = tuple(int(p) for p in parts)
+        if min(values) < 0:
+            raise argparse.ArgumentTypeError(
+                f"expected the end-diastole and end-systole frames as ED,ES (0-based), got {text!r}"
+            )
+        return values
+    if "," in str(text) or not str(text).strip():
         raise argparse.ArgumentTypeError(
-            f"expected the end-diastole and end-systole frames as ED,ES (0-based), got {text!r}"
+            f"expected ED,ES (two 0-based frames) or a frames table (CSV), got {text!r}"
         )
-    return values
+    return Path(text)
 
 
 def _plane(text: str) -> tuple[float, ...]:
@@ -61,27 +68,27 @@ def _lid_angle(text: str) -> float | None:
     return value
 
 
-def _read_planes(path: Path) -> dict:
-    """``{image: (x, y, z, nx, ny, nz)}`` from a CSV table, or a usage error naming the line."""
-    import csv
+def _image_names(images) -> dict:
+    """``{name: frame count}`` of every name a cut-plane table may give an image by (its
+    file name, its path; None for a 3-D image)."""
+    from ..imaging.label_images import image_stem
+    from ..imaging.plane_table import image_names
+    from ..imaging.series_frames import series_frame_counts
+
+    counts = series_frame_counts(images)
+    return {name: counts.get(image_stem(p)) for p in images for name in image_names(p)}
+
+
+def _frames_table(path: Path, images) -> dict:
+    """``{subject: (ed, es)}`` of ``--frames TABLE``, or a usage error naming the line."""
+    from ladders.tables import TableError
+
+    from ..imaging.series_frames import read_frames_table
 
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as exc:
-        raise UsageError(f"symladders mesh: error: --cut-planes {path}: {exc.strerror}") from None
-    planes = {}
-    for line, row in enumerate(rows, start=2):
-        try:
-            planes[row["image"].strip()] = tuple(
-                float(row[k]) for k in ("x", "y", "z", "nx", "ny", "nz")
-            )
-        except (KeyError, TypeError, ValueError, AttributeError):
-            raise UsageError(
-                f"symladders mesh: error: --cut-planes {path}, line {line}: expected the columns "
-                "image,x,y,z,nx,ny,nz with numbers"
-            ) from None
-    return planes
+        return read_frames_table(path, images)
+    except TableError as exc:
+        raise table_usage_error("mesh", "--frames", exc) from None
 
 
 def add_mesh_parser(sub) -> None:
@@ -91,7 +98,7 @@ def add_mesh_parser(sub) -> None:
         help="turn label images (NIfTI) into surface meshes in world millimetres",
         description=(
             "Extract the surface of one label of every image (NIfTI .nii/.nii.gz, 3-D per "
-            "frame as <subject>_ed / <subject>_es, or 4-D series with --frames ED,ES) in the "
+            "frame as <subject>_ed / <subject>_es, or 4-D series <subject>, see --frames) in the "
             "image's world frame (its affine: orientation, spacing, flips), keep the largest "
             "connected component, smooth (Gaussian mask, Taubin) and decimate. OUTPUT holds "
             "<subject>_ed.<ext>, <subject>_es.<ext> with a provenance record each (.json), "
@@ -107,20 +114,22 @@ def add_mesh_parser(sub) -> None:
     )
     p.add_argument("images", nargs="+", type=Path, metavar="IMAGES", help="label images")
     p.add_argument("--label", type=nonnegative_int, required=True, help="the structure's label")
-    p.add_argument("--frames", type=_frames, default=None, metavar="ED,ES",
-                   help="end-diastole and end-systole frames of 4-D series (0-based)")  # fmt: skip
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/meshes",
-                   help="folder of the meshes")  # fmt: skip
+    p.add_argument("--frames", type=_frames, default=None, metavar="ED,ES|TABLE",
+                   help="the end-diastole and end-systole frames of the 4-D series (0-based): ED,ES "
+                        "for every series, or a CSV table with the columns subject,ed,es, one row "
+                        "per series (subject: the file name without .nii.gz); a series without "
+                        "them is meshed at ED = frame 0 and ES = its frame of least cavity volume "
+                        "(--label's voxels), recorded in meshing.csv and the meshes' records")  # fmt: skip
+    add_output(p, "symladders-output/meshes", "folder of the meshes")
     p.add_argument("--vertices", type=nonnegative_int, default=2000,
                    help="target vertex count of each mesh (0: no decimation)")  # fmt: skip
-    p.add_argument("--mask-sigma", type=nonnegative_float, default=0.5,
+    p.add_argument("--mask-sigma", type=nonnegative_float, default=0.5, metavar="VOXELS",
                    help="Gaussian smoothing of the mask before marching cubes, in voxels")  # fmt: skip
     p.add_argument("--taubin-iterations", type=nonnegative_int, default=20,
                    help="iterations of Taubin (volume-preserving) smoothing of the surface")  # fmt: skip
     p.add_argument("--cut-plane", type=_plane, default=None, metavar="X,Y,Z,NX,NY,NZ",
                    help="remove the surface beyond this plane (mm), e.g. the valve plane")  # fmt: skip
-    p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
-                   help="CSV with the columns image,x,y,z,nx,ny,nz: a cut plane per image file")  # fmt: skip
+    add_cut_planes(p)
     p.add_argument("--cut-margin", type=nonnegative_float, default=0.5,
                    help="move the cut plane this many voxel widths against its normal, so that "
                         "the lid a label makes at the valve plane goes (0: cut at the plane)")  # fmt: skip
@@ -135,9 +144,8 @@ def add_mesh_parser(sub) -> None:
                    help="with --rv-label, the septal direction: half way between the RV's "
                         "insertion points (its angular edges about the long axis, as the AHA "
                         "segments are bounded) or towards the RV's centroid")  # fmt: skip
-    p.add_argument("--ext", choices=("vtk", "vtu", "ply", "obj", "off", "stl"), default="vtk")
-    p.add_argument("--jobs", type=jobs_count, default=2, help="images meshed in parallel")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--ext", choices=MESH_FORMATS, default="vtk", help="format of the meshes")
+    add_batch_arguments(p)
     p.set_defaults(run=run_mesh_command, output_is_file=False)
 
 
@@ -153,18 +161,24 @@ def run_mesh_command(args) -> int:
             f"symladders mesh: error: --rv-label {args.rv_label}: the right ventricle's label "
             "must differ from --label (the left ventricle's)"
         )
-    planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
+    planes = None
+    if args.cut_planes is not None:
+        planes = read_cut_planes(args.cut_planes, "mesh", _image_names(args.images))
+    frames = args.frames
+    if isinstance(frames, Path):
+        frames = _frames_table(frames, args.images)
     try:
         settings = MeshingSettings(
             mask_sigma=args.mask_sigma, taubin_iterations=args.taubin_iterations,
             n_vertices=args.vertices or None, cut_plane=args.cut_plane,
             cut_margin=args.cut_margin, lid_angle=args.lid_angle,
         )  # fmt: skip
-        outcome = mesh_label_images(
-            args.images, args.label, args.output, args.frames, settings, jobs=args.jobs,
-            progress=not args.no_progress, ext=args.ext, cut_planes=planes,
-            rv_label=args.rv_label, rv_septum=args.rv_septum,
-        )  # fmt: skip
+        with parallel_backend(args, "mesh"):
+            outcome = mesh_label_images(
+                args.images, args.label, args.output, frames, settings, jobs=args.jobs,
+                progress=not args.no_progress, ext=args.ext, cut_planes=planes,
+                rv_label=args.rv_label, rv_septum=args.rv_septum,
+            )  # fmt: skip
     except (ImageError, ValueError) as exc:
         raise UsageError(f"symladders mesh: error: {exc}") from None
     done = [r for r in outcome.records if r["status"] == "ok"]

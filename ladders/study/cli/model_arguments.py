@@ -1,8 +1,9 @@
 """The linear model's flags, shared by ``symladders analyze`` and ``symladders cycle-analyze``.
 
 :func:`add_model_arguments` defines ``--design``, ``--model``, ``--contrast``,
-``--blocks``, ``--outcome``, ``--baseline``, ``--tfce``, ``--aha``, ``--fwhm``,
-``--compare`` and ``--alpha`` once, with the same meaning and format in both commands;
+``--blocks``, ``--outcome``, ``--baseline``, ``--tfce``, ``--aha``, ``--fwhm`` and
+``--alpha`` once, with the same meaning and format in both commands, and adds
+``--compare`` (:func:`~.common_arguments.add_compare`, every command's);
 :func:`model_request` turns the parsed flags into the table, formula and contrasts
 to test (a design table, or a groups table as the model ``group``), with the checks
 both commands make before any computation; :func:`print_outcome` reports a survival
@@ -16,15 +17,16 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .cli_types import UsageError, existing_file, positive_float
+from .common_arguments import add_compare
 
-__all__ = ["ModelRequest", "add_model_arguments", "group_pair", "model_request", "print_outcome"]
+__all__ = ["ModelRequest", "add_model_arguments", "column_pair", "model_request", "print_outcome"]
 
 
-def group_pair(text: str) -> tuple[str, str]:
-    """``A,B`` -> ``("A", "B")``: two names separated by a comma."""
+def column_pair(text: str) -> tuple[str, str]:
+    """``TIME,EVENT`` -> ``("TIME", "EVENT")``: two column names separated by a comma."""
     names = tuple(t.strip() for t in text.split(","))
     if len(names) != 2 or not all(names):
-        raise argparse.ArgumentTypeError(f"expected two group names as A,B, got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected two column names as TIME,EVENT, got {text!r}")
     return names
 
 
@@ -60,7 +62,7 @@ def add_model_arguments(p, aha_use: str, fwhm_when: str = "") -> None:
     p.add_argument("--blocks", default=None, metavar="COLUMN",
                    help="a design column of exchangeability blocks (e.g. site): permutations "
                         "within blocks")  # fmt: skip
-    p.add_argument("--outcome", type=group_pair, default=None, metavar="TIME,EVENT",
+    p.add_argument("--outcome", type=column_pair, default=None, metavar="TIME,EVENT",
                    help="design columns of a survival outcome (follow-up time, event 1 or "
                         "censored 0): Cox regression on the motion's PCA scores, cross-validated "
                         "C-index per motion")  # fmt: skip
@@ -77,9 +79,7 @@ def add_model_arguments(p, aha_use: str, fwhm_when: str = "") -> None:
                    help=f"{fwhm_when}smooth every subject's maps on the atlas before the tests, "
                         "by the heat kernel of this full width at half maximum (mm); default: "
                         "not smoothed")  # fmt: skip
-    p.add_argument("--compare", type=group_pair, default=None, metavar="A,B",
-                   help="the two groups of --groups to compare, A against B (needed when the "
-                        "table has more than two)")  # fmt: skip
+    add_compare(p)
     p.add_argument("--alpha", type=_level, default=0.05, help="family-wise error level")
 
 

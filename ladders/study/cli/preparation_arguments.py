@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .cli_types import UsageError, positive_float
+from .cli_types import UsageError, checks_files, positive_float
 
 __all__ = [
     "UNIT_CHOICES",
@@ -105,6 +105,17 @@ def _mesh_extensions(writable: bool) -> tuple[str, ...]:
     return WRITE_EXTENSIONS if writable else MESH_EXTENSIONS
 
 
+def _mesh_name(text: str, writable: bool = False) -> Path:
+    """A path whose extension is a mesh format's (read, or with ``writable`` written)."""
+    path = Path(text).expanduser()
+    if path.suffix.lower() not in _mesh_extensions(writable=writable):
+        raise argparse.ArgumentTypeError(
+            f"expected a mesh file ({', '.join(_mesh_extensions(writable=writable))}), got {text!r}"
+        )
+    return path
+
+
+@checks_files(_mesh_name)
 def mesh_file(text: str) -> Path:
     """An existing file with the extension of a mesh format that is read."""
     path = Path(text).expanduser()
@@ -118,6 +129,7 @@ def mesh_file(text: str) -> Path:
     return path
 
 
+@checks_files(lambda text: _mesh_name(text, writable=True))
 def mesh_output_file(text: str) -> Path:
     """A mesh file to write: an extension that is written, in a folder that exists or can be
     created (nothing is created here), not an existing folder."""
@@ -140,6 +152,7 @@ def print_line(text: str) -> None:
     print(text, flush=True)
 
 
+@checks_files(Path)
 def _table_file(text: str) -> Path:
     path = Path(text).expanduser()
     if not path.is_file():

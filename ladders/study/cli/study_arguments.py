@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
-import numpy as np
-
-from .cli_types import (
-    existing_folder,
-    jobs_count,
-    nonnegative_int,
-    output_folder,
-    positive_float,
-    positive_int,
-    scheduler_address,
+from .cli_types import existing_file, existing_folder, positive_float, positive_int
+from .common_arguments import (
+    RECOMMENDED_ALPHA2,
+    add_alpha2,
+    add_batch_arguments,
+    add_output,
+    add_seed,
 )
-from .preparation_arguments import add_units_arguments
+from .plugin_arguments import deformation_list, registered_names
+from .preparation_arguments import add_units_arguments, mesh_file
 
 __all__ = [
     "add_study_arguments",
@@ -35,16 +30,6 @@ FULL_SUBJECTS = 138
 DEFAULT_VERTICES = 1009
 
 
-def _floats(text: str) -> tuple[float, ...]:
-    try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from exc
-    if not values or any(not np.isfinite(v) or v <= 0 for v in values):
-        raise argparse.ArgumentTypeError(f"expected positive numbers, got {text!r}")
-    return values
-
-
 def add_study_arguments(p) -> None:
     """Add the flags of ``symladders study`` to the parser ``p``."""
     _add_input_arguments(p)
@@ -61,13 +46,7 @@ def add_study_arguments(p) -> None:
 
 def _add_input_arguments(p) -> None:
     """Flags choosing the cohort and the output folder."""
-    p.add_argument(
-        "--output",
-        "-o",
-        type=output_folder,
-        default="symladders-output/study",
-        help="results folder",
-    )
+    add_output(p, "symladders-output/study", "results folder")
     source = p.add_mutually_exclusive_group()
     source.add_argument(
         "--meshes",
@@ -78,14 +57,15 @@ def _add_input_arguments(p) -> None:
     )
     source.add_argument(
         "--cohort",
-        type=Path,
+        type=existing_file,
         default=None,
+        metavar="TABLE",
         help="CSV table with the columns subject, ed, es (mesh paths relative to the table) "
         "instead of the built-in synthetic cohort",
     )
     p.add_argument(
         "--atlas",
-        type=Path,
+        type=mesh_file,
         default=None,
         help="atlas mesh (with --meshes or --cohort); default: atlas.<ext> in the folder "
         "or next to the table",
@@ -103,12 +83,14 @@ def _add_input_arguments(p) -> None:
         action="store_true",
         help=f"the paper's setting: {FULL_SUBJECTS} subjects and the 7-value alpha^2 sweep",
     )
-    p.add_argument(
-        "--alpha2",
-        type=_floats,
-        default=None,
-        help="comma-separated alpha^2 values (eq. 3); default: "
-        f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)}",
+    add_alpha2(
+        p,
+        None,
+        "alpha^2 values of the registrations (eq. 3); default: the paper's sweep "
+        f"{','.join(f'{a:g}' for a in DEFAULT_ALPHA2)} (its Table 1). Group statistics on the "
+        f"transported motion ('symladders analyze') use one value, alpha^2 = "
+        f"{RECOMMENDED_ALPHA2:g} (docs/population.md, 'Which to use when'): to transport "
+        f"for them only, --alpha2 {RECOMMENDED_ALPHA2:g}",
     )
     p.add_argument(
         "--vertices",
@@ -117,7 +99,7 @@ def _add_input_arguments(p) -> None:
         help="vertices of the built-in meshes, rounded to their grid of 1 + n_longitude x "
         "n_latitude vertices (the count used is printed)",
     )
-    p.add_argument("--seed", type=nonnegative_int, default=0, help="seed of the built-in cohort")
+    add_seed(p)
 
 
 #: Flags that set a field of the study's registration settings (flag dest -> field).
@@ -162,6 +144,7 @@ def _add_model_arguments(p) -> None:
         "--control-point-spacing",
         type=positive_float,
         default=d.control_point_spacing,
+        metavar="MM",
         help="spacing of the 'vertices', 'grid' and 'finegrid' control points (mesh units); "
         "default: the policy's multiple of sigma",
     )
@@ -229,10 +212,14 @@ def _add_model_arguments(p) -> None:
     )
     p.add_argument(
         "--deformation",
-        choices=("lddmm", "svf", "both"),
+        type=deformation_list,
         default="lddmm",
-        help="deformation model: LDDMM geodesics, stationary velocity fields (docs/svf.md), or "
-        "both (run into OUTPUT/lddmm and OUTPUT/svf, compared in OUTPUT/comparison.md)",
+        metavar="NAME[,NAME...]",
+        help="deformation model, a registered name (" + ", ".join(registered_names()) + "; "
+        "lddmm: LDDMM geodesics, svf: stationary velocity fields, docs/svf.md), or several "
+        "comma-separated (each run into OUTPUT/NAME, compared with the first in "
+        "OUTPUT/comparison.md); 'both' is lddmm,svf. A model of your own: --plugin "
+        "(docs/add_your_own_space.md)",
     )
     p.add_argument(
         "--kernel-backend",
@@ -244,22 +231,7 @@ def _add_model_arguments(p) -> None:
 
 def _add_run_arguments(p) -> None:
     """Flags of the execution: kernels, parallelism, progress, mesh outputs."""
-    p.add_argument(
-        "--jobs", "-j", type=jobs_count, default=-1, help="parallel workers (-1: all cores)"
-    )
-    p.add_argument(
-        "--backend",
-        choices=("loky", "dask"),
-        default="loky",
-        help="joblib backend; 'dask' runs subjects on a Dask cluster (extra 'cluster')",
-    )
-    p.add_argument(
-        "--scheduler",
-        type=scheduler_address,
-        default=None,
-        help="address of a running Dask scheduler (with --backend dask); default: a local cluster",
-    )
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_batch_arguments(p)
     p.add_argument(
         "--no-meshes",
         action="store_true",

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-import contextlib
 import sys
 import time
 import warnings
 from pathlib import Path
 
 from .cli_types import DefaultsFormatter, UsageError, check_sigma
+from .common_arguments import parallel_backend
+from .plugin_arguments import add_plugin_argument
 from .preparation_arguments import units_usage_error
 from .study_arguments import (
     DEFAULT_ALPHA2,
@@ -39,6 +40,7 @@ def add_study_parser(sub) -> None:
         formatter_class=DefaultsFormatter,
     )
     add_study_arguments(p)
+    add_plugin_argument(p)
     p.set_defaults(run=run_study_command)
 
 
@@ -124,27 +126,6 @@ def _load_cohort(args):
     return cohort, description
 
 
-@contextlib.contextmanager
-def _backend(args):
-    if args.backend != "dask":
-        yield
-        return
-    try:
-        from dask.distributed import Client
-        from joblib import parallel_config
-    except ImportError as exc:
-        raise SystemExit(
-            "symladders study: --backend dask needs the optional extra: "
-            "pip install 'symladders[cluster]'"
-        ) from exc
-    client = Client(args.scheduler) if args.scheduler else Client(processes=True)
-    try:
-        with parallel_config(backend="dask"):
-            yield
-    finally:
-        client.close()
-
-
 def _note_pairs_without_meshes(outcome) -> None:
     """Tell which resumed pairs have no mesh files (they were computed with --no-meshes)."""
     from ..meshes.mesh_outputs import alpha_folder
@@ -185,6 +166,7 @@ def _config(args, deformation: str):
 def _run_one(args, cohort, description, config, output: Path, units: str):
     """Run (or resume) one study into ``output`` (:func:`ladders.study.run`), print its summary."""
     from ..reporting import summarize, terminal_summary
+    from ..reporting.report import skipped_markdown
     from ..running import RegistrationCounts
     from ..study_run import run
 
@@ -194,7 +176,7 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
         f"output {output}"
     )
     print(units)
-    with _backend(args):
+    with parallel_backend(args, "study"):
         done = run(
             config, cohort, output, jobs=args.jobs, progress=not args.no_progress,
             meshes=not args.no_meshes, units=units, data_description=description,
@@ -218,6 +200,9 @@ def _run_one(args, cohort, description, config, output: Path, units: str):
         f"iteration limit (--max-iter {config.registration.max_iter}) before converging "
         f"({rule!r})."
     )
+    skipped = skipped_markdown(outcome.results)
+    if skipped:
+        print(skipped, end="")
     if "maps_subject" in paths:
         print(f"Fig. 5b shows subject {paths.pop('maps_subject')} (median ASE).")
     print(f"Full tables and figures in {output}:", ", ".join(Path(v).name for v in paths.values()))
@@ -237,34 +222,56 @@ def _note_recomputed(outcome) -> None:
 
 
 def _write_comparison(outcomes: dict, output: Path) -> Path:
-    from ..reporting import write_deformation_comparison
+    from ..reporting import write_model_comparison
 
-    path, text = write_deformation_comparison(
-        outcomes["lddmm"].results, outcomes["svf"].results, output
-    )
+    path, text = write_model_comparison({m: o.results for m, o in outcomes.items()}, output)
     print(text)
     return path
+
+
+def _models(args) -> tuple[str, ...]:
+    """The models of ``--deformation``, refused here when one cannot take the flags."""
+    from ..deformations import deformation_model, deformation_names, parse_deformations
+
+    models = parse_deformations(args.deformation)
+    if args.optimize_control_points:
+        able = [n for n in deformation_names() if deformation_model(n).optimizes_control_points]
+        if any(m not in able for m in models):
+            raise UsageError(
+                "symladders study: --optimize-control-points works with --deformation "
+                f"{' or '.join(able) or 'no registered model'} only"
+            )
+    return models
+
+
+def _check_models(configs: dict, atlas) -> None:
+    """Every model's interface on the atlas (:func:`check_deformation_model`), before any
+    study starts; a broken model is refused in one line naming it and the property."""
+    from ..deformations import DeformationModelError, check_deformation_model
+
+    for config in configs.values():
+        try:
+            check_deformation_model(config.model, atlas, config.registration)
+        except DeformationModelError as exc:
+            raise UsageError(f"symladders study: error: {exc}") from None
 
 
 def run_study_command(args) -> int:
     """Run the study from parsed command-line arguments.
 
-    With ``--deformation both`` the LDDMM and the SVF studies run into
-    ``OUTPUT/lddmm`` and ``OUTPUT/svf`` and ``OUTPUT/comparison.md`` (and
-    ``.csv``) compares them subject by subject.
+    With several models (``--deformation lddmm,svf``, or ``both``) each runs into
+    ``OUTPUT/<name>`` and ``OUTPUT/comparison.md`` (and ``.csv``) compares every model
+    with the first, subject by subject.
     """
     start = time.perf_counter()
     cohort, description = _load_cohort(args)
     cohort, units = _check_units(args, cohort, description)
     output = Path(args.output)
-    models = ("lddmm", "svf") if args.deformation == "both" else (args.deformation,)
-    if args.optimize_control_points and "svf" in models:
-        raise UsageError(
-            "symladders study: --optimize-control-points works with --deformation lddmm only"
-        )
+    models = _models(args)
     configs = {model: _config(args, model) for model in models}
     for config in configs.values():  # before any study starts (run() checks it again)
         check_sigma(cohort.atlas, config.registration)
+    _check_models(configs, cohort.atlas)
     outcomes = {}
     for model, config in configs.items():
         folder = output / model if len(models) > 1 else output

@@ -7,10 +7,8 @@ standard error), 2 on a usage error.
 
 from __future__ import annotations
 
-import csv
 import os
 import sys
-from pathlib import Path
 
 from .cli_types import (
     DefaultsFormatter,
@@ -19,42 +17,35 @@ from .cli_types import (
     jobs_count,
     nonnegative_float,
     nonnegative_int,
-    output_folder,
     positive_float,
+)
+from .common_arguments import (
+    add_batch_arguments,
+    add_cut_planes,
+    add_output,
+    parallel_backend,
+    read_cut_planes,
 )
 
 __all__ = ["add_track_parser", "run_track_command"]
 
-_COLUMNS = ("x", "y", "z", "nx", "ny", "nz")
 
+def _series_names(images) -> dict:
+    """``{name: frame count}`` of every name a cut-plane table may give a series by (its
+    subject, its file or folder name, its path); a series that cannot be opened is left
+    out (its tracking records why)."""
+    from ..tracking.label_series import SeriesError, find_series, open_series
 
-def _read_planes(path: Path) -> dict:
-    """``{image: plane or {frame: plane}}`` from a CSV table, or a usage error naming the line."""
-    try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as exc:
-        raise UsageError(f"symladders track: error: --cut-planes {path}: {exc.strerror}") from None
-    planes: dict = {}
-    for line, row in enumerate(rows, start=2):
+    names = {}
+    for subject, source in find_series(images).items():
+        if isinstance(source, str):
+            continue
         try:
-            key = row["image"].strip()
-            plane = tuple(float(row[k]) for k in _COLUMNS)
-            frame = (row.get("frame") or "").strip()
-            frame = "all" if frame in ("", "all") else str(int(frame))
-        except (KeyError, TypeError, ValueError, AttributeError):
-            raise UsageError(
-                f"symladders track: error: --cut-planes {path}, line {line}: expected the columns "
-                "image,x,y,z,nx,ny,nz with numbers (and optionally frame, 0-based)"
-            ) from None
-        entry = planes.setdefault(key, {})
-        if frame in entry:
-            raise UsageError(
-                f"symladders track: error: --cut-planes {path}, line {line}: a second plane for "
-                f"{key!r} frame {frame}"
-            )
-        entry[frame] = plane
-    return planes
+            n = open_series(source, labels=False).n_frames
+        except SeriesError:
+            continue
+        names.update({subject: n, source.name: n, str(source): n})
+    return names
 
 
 def add_track_parser(sub) -> None:
@@ -72,6 +63,8 @@ def add_track_parser(sub) -> None:
             "is also reached from ED directly and the two results are combined (less drift). "
             "The ED mesh is first moved along its normals onto ED's surface meshed like the "
             "other frames, so that the motion is measured between surfaces extracted alike. "
+            "A cut plane for every frame of a subject (--cut-planes, e.g. the cohort's "
+            "valve_planes.csv) also anchors the base's height in the projection's affine fits. "
             "OUTPUT holds <subject>/frame_<kk>.vtk (the atlas's faces), <subject>.json "
             "(provenance and per-frame quality) and tracking.csv. A failing subject is recorded "
             "with its reason and the others finish (exit 1); a rerun skips the subjects done "
@@ -111,8 +104,7 @@ def add_track_parser(sub) -> None:
                         "same result whatever N; with --reference ed, the two halves of the "
                         "cycle: N = 2 at most); with --jobs subjects at a time, use at most "
                         "cores / jobs")  # fmt: skip
-    p.add_argument("--output", "-o", type=output_folder, default="symladders-output/tracked",
-                   help="folder of the tracked meshes")  # fmt: skip
+    add_output(p, "symladders-output/tracked", "folder of the tracked meshes")
     p.add_argument("--method", choices=("projection", "registration"), default="projection",
                    help="frame to frame: affine fit then normal projection, or LDDMM registration")  # fmt: skip
     p.add_argument("--refine-ed", action="store_true",
@@ -131,14 +123,8 @@ def add_track_parser(sub) -> None:
                    help="Gaussian smoothing of each frame's label before meshing (voxels of each "
                         "axis); more than 'symladders mesh' uses: on thick slices it lowers the "
                         "noise of the tracked motion")  # fmt: skip
-    p.add_argument("--cut-planes", type=Path, default=None, metavar="TABLE",
-                   help="CSV with the columns image,x,y,z,nx,ny,nz[,frame]: the valve plane of a "
-                        "subject (image: its name or its series' file name), for one frame or, "
-                        "without a frame, for all; a plane for every frame (e.g. the cohort's "
-                        "valve_planes.csv) also anchors the base's height in the projection's "
-                        "affine fits")  # fmt: skip
-    p.add_argument("--jobs", type=jobs_count, default=2, help="subjects tracked in parallel")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_cut_planes(p)
+    add_batch_arguments(p)
     p.set_defaults(run=run_track_command, output_is_file=False)
 
 
@@ -149,7 +135,9 @@ def run_track_command(args) -> int:
 
     if args.label is None and not args.cine:
         raise UsageError("symladders track: error: --label: required for label series (or --cine)")
-    planes = None if args.cut_planes is None else _read_planes(args.cut_planes)
+    planes = args.cut_planes and read_cut_planes(
+        args.cut_planes, "track", _series_names(args.images)
+    )
     args.on_interrupt = f"the subjects done are kept in {args.output}; rerun the command to resume"
     try:
         if args.cine:
@@ -172,9 +160,10 @@ def run_track_command(args) -> int:
                 project_ed=not args.keep_ed, meshing=meshing,
             )  # fmt: skip
         label = 0 if args.label is None else args.label
-        outcome = track_cohort(args.meshes, args.images, args.output, label, settings,
-                               cut_planes=planes, jobs=args.jobs,
-                               progress=not args.no_progress)  # fmt: skip
+        with parallel_backend(args, "track"):
+            outcome = track_cohort(args.meshes, args.images, args.output, label, settings,
+                                   cut_planes=planes, jobs=args.jobs,
+                                   progress=not args.no_progress)  # fmt: skip
     except (SeriesError, ValueError) as exc:
         raise UsageError(f"symladders track: error: {exc}") from None
     counts = {

@@ -15,61 +15,40 @@ Subjects keep the table's order. The atlas is given by ``atlas=PATH`` or is the
 
 from __future__ import annotations
 
-import csv
 from pathlib import Path
+
+from ladders.tables import Column, read_table
 
 from ..errors import MeshFolderError, MissingAtlasError
 from ..meshes.mesh_io import MESH_EXTENSIONS, OTHER_MESH_EXTENSIONS
 from .cohort import Cohort
 from .mesh_folder import assemble_cohort, warn_unused
 
-__all__ = ["read_cohort_table"]
+__all__ = ["read_cohort_table", "COHORT_COLUMNS"]
 
-_COLUMNS = ("subject", "ed", "es")
+#: The columns of a cohort table (no other: it would be ignored).
+COHORT_COLUMNS = (Column("subject"), Column("ed"), Column("es"))
 
 
 def _rows(table: Path) -> list[tuple[int, dict[str, str]]]:
-    try:
-        text = table.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MeshFolderError(f"{table}: cannot be read ({exc})") from exc
-    reader = csv.reader(text.splitlines())
-    header = next(reader, None)
-    if header is None:
-        raise MeshFolderError(f"{table}: empty table, expected a header row 'subject,ed,es'")
-    names = [h.strip().lower() for h in header]
-    missing = [c for c in _COLUMNS if c not in names]
-    if missing:
-        raise MeshFolderError(
-            f"{table}: missing column(s) {missing}; expected the columns 'subject', 'ed', 'es', "
-            f"found {header}"
-        )
-    rows = []
-    for line, values in enumerate(reader, start=2):
-        if not any(v.strip() for v in values):
-            continue
-        if len(values) != len(names):
-            raise MeshFolderError(
-                f"{table} line {line}: {len(values)} values for {len(names)} columns"
-            )
-        rows.append((line, {n: v.strip() for n, v in zip(names, values, strict=True)}))
-    if not rows:
-        raise MeshFolderError(f"{table}: no subject rows below the header")
-    return rows
+    """``(line, row)`` of every subject of the table (:func:`ladders.tables.read_table`)."""
+    rows = read_table(table, COHORT_COLUMNS, what="cohort table", key=("subject",),
+                      error=MeshFolderError)  # fmt: skip
+    return list(zip(rows.lines, rows.rows))
 
 
 def _mesh_path(table: Path, line: int, value: str, column: str) -> Path:
-    if not value:
-        raise MeshFolderError(f"{table} line {line}: empty '{column}' path")
     path = Path(value).expanduser()
     path = path if path.is_absolute() else table.parent / path
     if path.suffix.lower() not in MESH_EXTENSIONS:
         raise MeshFolderError(
-            f"{table} line {line}: '{column}' file {path} has an unsupported extension, "
-            f"expected one of {MESH_EXTENSIONS}"
+            f"cohort table {table}, line {line}, column {column!r}: {path} has an "
+            f"unsupported extension, expected one of {MESH_EXTENSIONS}"
         )
     if not path.is_file():
-        raise MeshFolderError(f"{table} line {line}: '{column}' file {path} does not exist")
+        raise MeshFolderError(
+            f"cohort table {table}, line {line}, column {column!r}: {path} does not exist"
+        )
     return path
 
 
@@ -138,15 +117,11 @@ def read_cohort_table(table, atlas=None) -> Cohort:
     entries: dict[str, dict[str, Path]] = {}
     for line, row in _rows(table):
         name = row["subject"]
-        if not name:
-            raise MeshFolderError(f"{table} line {line}: empty subject name")
         if any(c in name for c in "/\\") or name in (".", ".."):
             raise MeshFolderError(
-                f"{table} line {line}: subject name {name!r} must not be a path "
+                f"cohort table {table}, line {line}, column 'subject': {name!r} must not be a path "
                 "(it names the subject's result files)"
             )
-        if name in entries:
-            raise MeshFolderError(f"{table} line {line}: subject {name!r} is listed twice")
         entries[name] = {c: _mesh_path(table, line, row[c], c) for c in ("ed", "es")}
     atlas_path = Path(atlas) if atlas is not None else _atlas_next_to(table)
     if not atlas_path.is_file():

@@ -37,8 +37,10 @@ from .label_images import (
     read_label_series,
 )
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
+from .plane_table import check_plane_table, planes_by_image, read_plane_table
 from .rv_label import add_rv_label, voxel_centres
 from .septum import label_centroid, label_points, landmarks_from_labels, lv_apex_and_base
+from .series_frames import FRAME_CHOICES, least_volume_frame, read_frames_table
 from .surface_extraction import (
     MeshingSettings,
     SurfaceReport,
@@ -60,6 +62,12 @@ __all__ = [
     "MeshingTask",
     "mesh_label_images",
     "plan_meshing",
+    "read_plane_table",
+    "check_plane_table",
+    "planes_by_image",
+    "FRAME_CHOICES",
+    "least_volume_frame",
+    "read_frames_table",
     "MeshingSettings",
     "SurfaceReport",
     "cut_at_plane",

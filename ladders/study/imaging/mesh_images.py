@@ -6,13 +6,15 @@
 
 * a 3-D image per frame, ``<subject>_ed.nii.gz`` and ``<subject>_es.nii.gz``, gives
   ``<subject>_ed<ext>`` and ``<subject>_es<ext>``;
-* a 4-D series ``<subject>.nii.gz`` with ``frames=(ed, es)`` gives the same two meshes.
+* a 4-D series ``<subject>.nii.gz`` gives the same two meshes, of the frames given
+  (``frames``) or, without, of its first frame (ED) and its frame of least cavity
+  volume (ES, :mod:`.series_frames`).
 
 Each mesh is written atomically with a provenance record beside it
 (``<mesh>.json``: the source's SHA-256, label, frame, voxel spacing, affine, the
 settings and the extraction report); a rerun skips the meshes whose record matches
 (same source bytes, label, frame and settings). A file that fails (label absent,
-not a label image, 4-D without a frame, frame out of range, no or a singular affine,
+not a label image, a frame out of range, no or a singular affine,
 the two frames of a subject on different grids) is recorded with its reason in
 ``meshing.csv`` and the others go on.
 
@@ -35,7 +37,7 @@ from __future__ import annotations
 import csv
 import io
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import nibabel as nib
@@ -44,26 +46,35 @@ import numpy as np
 from ..batch import run_batch
 from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
-from ..preparation.landmarks import LANDMARKS_FILE, Landmarks, write_landmarks
+from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
+from .meshing_landmarks import PHASES, ed_landmarks, folder_landmarks, landmarks_of, subject_phase
+from .plane_table import image_names, plane_for
 from .septum import SEPTUM_METHODS, landmarks_from_labels
+from .series_frames import least_volume_frame
 from .surface_extraction import MeshingSettings, extract_surface
 
 __all__ = ["MeshingTask", "MeshingOutcome", "plan_meshing", "mesh_label_images", "REPORT_FILE"]
 
 #: The batch's table of files, written into the output folder.
 REPORT_FILE = "meshing.csv"
-_PHASES = ("ed", "es")
 
 
 @dataclass(frozen=True)
 class MeshingTask:
-    """One mesh to write: its source image, frame and output name."""
+    """One mesh to write: its source image, frame and output name.
+
+    ``how`` says how the frame of a 4-D series was chosen (one of
+    :data:`~.series_frames.FRAME_CHOICES`; empty for a 3-D image) and ``volumes`` are the
+    series' cavity volumes per frame (mm^3) when they chose it.
+    """
 
     source: Path
     frame: int | None
     output: str
     error: str = ""
+    how: str = ""
+    volumes: tuple = ()
 
 
 @dataclass
@@ -92,15 +103,7 @@ class MeshingOutcome:
     @property
     def landmarks(self) -> dict:
         """``{subject: Landmarks}`` of the end-diastolic meshes made or reused by this run."""
-        return _ed_landmarks(self.records)
-
-
-def _subject_phase(stem: str) -> tuple[str, str | None]:
-    low = stem.lower()
-    for phase in _PHASES:
-        if low.endswith(f"_{phase}"):
-            return stem[: -len(phase) - 1], phase
-    return stem, None
+        return ed_landmarks(self.records)
 
 
 def _shape(path: Path):
@@ -111,25 +114,41 @@ def _shape(path: Path):
         return None, None
 
 
+def _series_tasks(path: Path, stem: str, frames, label: int, ext: str) -> list[MeshingTask]:
+    """The ED and ES tasks of a 4-D series: its frames given, tabled, or found (the first
+    frame; the frame of least volume of ``label``)."""
+    volumes: tuple = ()
+    if isinstance(frames, dict) and stem in frames:
+        chosen, how = frames[stem], ("table", "table")
+    elif frames is not None and not isinstance(frames, dict):
+        chosen, how = frames, ("given", "given")
+    else:
+        try:
+            es, found = least_volume_frame(path, label)
+        except ImageError as exc:
+            return [MeshingTask(path, None, f"{stem}_{phase}{ext}", str(exc)) for phase in PHASES]
+        chosen, how, volumes = (0, es), ("first frame", "least volume"), tuple(found)
+    return [MeshingTask(path, int(frame), f"{stem}_{phase}{ext}", how=h, volumes=volumes)
+            for phase, frame, h in zip(PHASES, chosen, how)]  # fmt: skip
+
+
 def plan_meshing(
-    images, frames: tuple[int, int] | None = None, ext: str = ".vtk"
+    images, frames: tuple[int, int] | dict | None = None, ext: str = ".vtk", label: int = 1
 ) -> list[MeshingTask]:
-    """The meshes to write for ``images`` (see the module), with the errors known beforehand."""
+    """The meshes to write for ``images`` (see the module), with the errors known beforehand.
+
+    ``frames`` as :func:`mesh_label_images`'s; a 4-D series whose frames are not given is
+    read here, to find the frame of least volume of ``label`` (its end-systole).
+    """
     tasks: list[MeshingTask] = []
     by_subject: dict[str, dict[str, MeshingTask]] = {}
     for path in sorted(Path(p) for p in images):
         stem = image_stem(path)
         shape, _ = _shape(path)
         if shape is not None and len(shape) == 4 and (shape[3] > 1 or frames is not None):
-            if frames is None:
-                tasks.append(MeshingTask(path, None, f"{stem}{ext}",
-                                         f"{path}: a 4-D series of {shape[3]} frames: name the "
-                                         "frames (--frames ED,ES)"))  # fmt: skip
-                continue
-            for phase, frame in zip(_PHASES, frames):
-                tasks.append(MeshingTask(path, int(frame), f"{stem}_{phase}{ext}"))
+            tasks.extend(_series_tasks(path, stem, frames, label, ext))
             continue
-        subject, phase = _subject_phase(stem)
+        subject, phase = subject_phase(stem)
         task = MeshingTask(path, None, f"{stem}{ext}")
         tasks.append(task)
         if phase is not None:
@@ -145,42 +164,8 @@ def plan_meshing(
                 f"different grids (shapes {s1} and {s2}, or different affines): segment both "
                 "frames on one grid"
             )
-            tasks = [MeshingTask(t.source, t.frame, t.output, message) if t in pair.values() else t
-                     for t in tasks]  # fmt: skip
+            tasks = [replace(t, error=message) if t in pair.values() else t for t in tasks]
     return tasks
-
-
-def _ed_landmarks(records: list) -> dict:
-    """``{subject: Landmarks}`` of the records of end-diastolic meshes that have landmarks."""
-    table = {}
-    for r in records:
-        subject, phase = _subject_phase(Path(r["mesh"]).stem)
-        if r["status"] != "failed" and phase == "ed" and r.get("landmarks") is not None:
-            table[subject] = Landmarks.from_array(r["landmarks"])
-    return table
-
-
-def _folder_landmarks(folder: Path, ext: str, records: list) -> dict:
-    """``{subject: Landmarks}`` of every end-diastolic mesh of ``folder`` with landmarks.
-
-    This run's records first: its meshes made or reused, none for its failed images;
-    then the meshes of the folder this run did not touch (an earlier run on other
-    images), from their provenance records.
-    """
-    table = _ed_landmarks(records)
-    touched = {r["mesh"] for r in records}
-    for mesh in sorted(folder.glob(f"*{ext}")):
-        subject, phase = _subject_phase(mesh.stem)
-        if phase != "ed" or mesh.name in touched or subject in table:
-            continue
-        try:
-            record = json.loads(mesh.with_suffix(".json").read_text(encoding="utf-8"))
-        except (OSError, ValueError):
-            continue
-        landmarks = _landmarks_of(record) if isinstance(record, dict) else None
-        if landmarks is not None:
-            table[subject] = Landmarks.from_array(landmarks)
-    return dict(sorted(table.items()))
 
 
 def _matching_record(
@@ -206,33 +191,23 @@ def _matching_record(
         and record.get("settings") == settings.as_dict()
     )
     if rv_label is not None:  # the landmarks of this RV label are part of the result
-        same = (same and record.get("rv_label") == rv_label and _landmarks_of(record) is not None
+        same = (same and record.get("rv_label") == rv_label and landmarks_of(record) is not None
                 and record.get("rv_septum", "centroid") == rv_septum)  # fmt: skip
     return record if same else None
 
 
-def _landmarks_of(record: dict) -> list | None:
-    """The landmarks (3 x 3 nested list) of a provenance record, None if it has none usable."""
-    entry = record.get("landmarks")
-    try:
-        return Landmarks(*(entry[k] for k in ("apex", "base", "septum"))).as_array().tolist()
-    except (TypeError, KeyError, ValueError):
-        return None
-
-
 def _settings_for(task: MeshingTask, settings: MeshingSettings, cut_planes: dict | None):
     """The settings of one image: its own cut plane where one is given for its file."""
-    if not cut_planes:
-        return settings
-    plane = cut_planes.get(task.source.name, cut_planes.get(str(task.source)))
+    plane = plane_for(cut_planes, image_names(task.source), task.frame)
     if plane is None:
         return settings
     return MeshingSettings(**{**settings.as_dict(), "cut_plane": tuple(plane)})
 
 
 def _row(task: MeshingTask) -> dict:
-    return {"source": str(task.source), "frame": task.frame, "mesh": task.output, "status": "ok",
-            "error": "", "report": "", "landmarks": None}  # fmt: skip
+    return {"source": str(task.source), "frame": task.frame, "frame_choice": task.how,
+            "mesh": task.output, "status": "ok", "error": "", "report": "",
+            "landmarks": None}  # fmt: skip
 
 
 def _meshed(
@@ -256,7 +231,7 @@ def _meshed(
                               rv_septum)  # fmt: skip
     if record is None:
         return None
-    landmarks = None if rv_label is None else _landmarks_of(record)
+    landmarks = None if rv_label is None else landmarks_of(record)
     return {**_row(task), "status": "skipped", "landmarks": landmarks}
 
 
@@ -287,10 +262,12 @@ def _mesh_one(
         write_mesh(out, vertices, faces, atomic=True)
         record = {
             "source": str(task.source.resolve()), "sha256": sha, "label": label,
-            "frame": task.frame, "spacing_mm": list(image.spacing),
+            "frame": task.frame, "frame_choice": task.how, "spacing_mm": list(image.spacing),
             "affine": np.asarray(image.affine).tolist(), "settings": settings.as_dict(),
             "report": report.as_dict(),
         }  # fmt: skip
+        if task.volumes:
+            record["cavity_volumes_mm3"] = list(task.volumes)
         if landmarks is not None:
             record["rv_label"] = rv_label
             record["rv_septum"] = rv_septum
@@ -305,7 +282,8 @@ def _mesh_one(
 
 def _report_csv(records: list) -> str:
     buf = io.StringIO()
-    writer = csv.DictWriter(buf, fieldnames=["source", "frame", "mesh", "status", "error", "report"],
+    writer = csv.DictWriter(buf, fieldnames=["source", "frame", "frame_choice", "mesh", "status", "error",
+                                                "report"],
                             lineterminator="\n", extrasaction="ignore")  # fmt: skip
     writer.writeheader()
     writer.writerows(records)
@@ -335,8 +313,13 @@ def mesh_label_images(
         The structure's label (e.g. the left-ventricle cavity).
     output : path
         The mesh folder (created).
-    frames : (int, int), optional
-        End-diastole and end-systole frames of 4-D series (0-based).
+    frames : (int, int) or dict, optional
+        End-diastole and end-systole frames of the 4-D series (0-based): one pair for
+        every series, or ``{subject: (ed, es)}`` per series (the subject named from the
+        file, :func:`~.label_images.image_stem`). A series without them is meshed at
+        its first frame (ED) and its frame of least volume of ``label`` (ES,
+        :func:`~.series_frames.least_volume_frame`). ``meshing.csv`` and every mesh's
+        record state the frame and how it was chosen (``frame_choice``).
     settings : MeshingSettings, optional
     jobs : int, default 2
         Images meshed in parallel (joblib processes).
@@ -345,8 +328,10 @@ def mesh_label_images(
     ext : str, default ".vtk"
         Mesh format.
     cut_planes : dict, optional
-        ``{image file name: (x, y, z, nx, ny, nz)}``: a cut plane per image (e.g. each
-        frame's valve plane, in world mm), in place of ``settings.cut_plane``.
+        ``{image file name or path: plane}`` with ``plane`` ``(x, y, z, nx, ny, nz)`` (world
+        mm) for every frame, or ``{frame: plane}`` per frame of a series (a key ``"all"``
+        for the others; :func:`~.plane_table.planes_by_image`), in place of
+        ``settings.cut_plane``.
     rv_label : int, optional
         The right ventricle's label in the same images: each mesh gets its landmarks
         and the folder a landmark table (see the module). None: no landmarks.
@@ -378,7 +363,7 @@ def mesh_label_images(
     folder = Path(output)
     folder.mkdir(parents=True, exist_ok=True)
     tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label, rv_septum)
-             for t in plan_meshing(images, frames, ext)]  # fmt: skip
+             for t in plan_meshing(images, frames, ext, int(label))]  # fmt: skip
     records = []
     landmarks_file = None if rv_label is None else folder / LANDMARKS_FILE
     try:
@@ -391,5 +376,5 @@ def mesh_label_images(
         with atomic_path(folder / REPORT_FILE) as tmp:
             tmp.write_text(_report_csv(records), encoding="utf-8")
         if landmarks_file is not None:
-            write_landmarks(landmarks_file, _folder_landmarks(folder, ext, records))
+            write_landmarks(landmarks_file, folder_landmarks(folder, ext, records))
     return MeshingOutcome(folder, records, landmarks_file)

@@ -16,10 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ladders.tables import locate
 from manifolds.validation import check_int
 
 from ..cohort.planted_effect import PlantedRegion
 from ..errors import CohortError
+from ..recommendations import main_motion
 from .against_truth import TransportScore, score_transports
 from .analysis_outputs import write_analysis
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups
@@ -82,8 +84,9 @@ def check_groups_table(
     if absent:
         shown = ", ".join(absent[:5]) + (" ..." if len(absent) > 5 else "")
         raise CohortError(
-            f"groups: {len(absent)} subject(s) of the table are not in the study (no result at "
-            f"every alpha^2): {shown}"
+            f"{locate(groups, 'subject', absent[0], 'groups')}: unknown subject {absent[0]!r}: "
+            f"{len(absent)} subject(s) of the table are not in the study (no result at every "
+            f"alpha^2): {shown}"
         )
     compare = compared_groups(groups, compare)
     kept = [s for s in subjects if groups.get(s) in compare]
@@ -133,16 +136,6 @@ def read_planted_region(path) -> PlantedRegion:
     if region is None:
         raise CohortError(f"truth {path}: the cohort has no planted abnormality (a null cohort)")
     return PlantedRegion.from_dict(region)
-
-
-def _main(comparisons: list[GroupComparison]) -> GroupComparison:
-    """The pole ladder with residuals at the alpha^2 nearest 1 (else the first motion)."""
-    ladders = [c for c in comparisons if c.motion.method == "pole_ladder_residual"]
-    if not ladders:
-        return comparisons[0]
-    return min(
-        ladders, key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2)))
-    )
 
 
 def analyze(
@@ -223,7 +216,7 @@ def analyze(
             )  # fmt: skip
             for m in motions
         ]
-    main = _main(comparisons)
+    main = main_motion(comparisons)
     truth = (
         None
         if region is None

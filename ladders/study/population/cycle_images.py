@@ -146,6 +146,7 @@ def write_cycle_cohort(
     rng: np.random.Generator | None = None,
     frames: bool = True,
     landmarks: bool = False,
+    progress: bool = False,
 ) -> Path:
     """Write a whole-cycle cohort's images, frames and truth into ``folder`` (see the module).
 
@@ -172,11 +173,15 @@ def write_cycle_cohort(
         surface its ED image is rendered from; ``<subject>_ed`` itself for a cohort without
         segmentation noise), in the coordinates of the meshes and of the images' world
         frame, which ``symladders correspond --landmarks`` reads.
+    progress : bool, default False
+        A progress bar over the subjects written (tqdm).
 
     Returns
     -------
     Path
     """
+    from tqdm.auto import tqdm
+
     if images not in IMAGE_KINDS:
         raise CohortError(f"images: expected one of {IMAGE_KINDS}, got {images!r}")
     if images != "cine" and tagging is not None:
@@ -199,7 +204,7 @@ def write_cycle_cohort(
     if rng is None:
         rng = np.random.default_rng([int(getattr(data, "seed", 0)), 3])
     grids = {}
-    for i, name in enumerate(cycles.names):
+    for i, name in enumerate(tqdm(cycles.names, desc="subjects", disable=not progress)):
         affine, shape = cycle_grid(cycles.frames[i, 0], in_plane, thickness)
         grids[name] = {"affine": affine.tolist(), "shape": list(shape)}
         if images == "labels":

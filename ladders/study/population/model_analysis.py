@@ -29,6 +29,7 @@ from manifolds.validation import check_int
 from ..errors import CohortError
 from ..files import atomic_write_text
 from ..meshes.mesh_outputs import write_point_mesh
+from ..recommendations import main_motion
 from .aha_model import AHA_NAMES, aha_segments
 from .analysis import select_motions
 from .group_comparison import normalize_motion
@@ -52,20 +53,12 @@ class ModelOutcome:
 
 
 def main_comparison(comparisons: list[ModelComparison]) -> list[ModelComparison]:
-    """Per contrast, the pole ladder with residuals at the alpha^2 nearest 1 (else the first)."""
-    out = []
-    for name in dict.fromkeys(c.contrast for c in comparisons):
-        same = [c for c in comparisons if c.contrast == name]
-        ladders = [c for c in same if c.motion.method == "pole_ladder_residual"]
-        out.append(
-            min(
-                ladders,
-                key=lambda c: (c.motion.deformation != "lddmm", abs(np.log(c.motion.alpha2))),
-            )  # fmt: skip
-            if ladders
-            else same[0]
-        )
-    return out
+    """Per contrast, the main motion (:func:`~ladders.study.recommendations.main_motion`: the
+    pole ladder with residuals at the alpha^2 nearest the recommended one, else the first)."""
+    return [
+        main_motion([c for c in comparisons if c.contrast == name])
+        for name in dict.fromkeys(c.contrast for c in comparisons)
+    ]
 
 
 def _slug(text: str) -> str:

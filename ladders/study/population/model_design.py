@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ladders.statistics import Design, contrast_matrix, design_matrix
+from ladders.tables import locate
 
 from ..errors import CohortError
 
@@ -55,7 +56,8 @@ def check_design_table(
     CohortError
         The table has no ``subject`` column, names a subject the study does not have
         (the first one, with its line in the file: the header is line 1), or shares
-        fewer than 3 subjects with the study.
+        fewer than 3 subjects with the study. A table read from a file (a
+        :class:`~ladders.tables.TableDict`) names the file, the line and the column.
     """
     where = _where(source)
     if "subject" not in table:
@@ -65,9 +67,10 @@ def check_design_table(
     unknown = [(i, s) for i, s in enumerate(listed) if s not in known]
     if unknown:
         line, name = unknown[0][0] + 2, unknown[0][1]
+        place = locate(table, "subject", name, f"{where}, line {line}")
         more = f" (and {len(unknown) - 1} more)" if len(unknown) > 1 else ""
         raise CohortError(
-            f"{where}, line {line}: subject {name!r} not in {study} (it has {len(subjects)} "
+            f"{place}: unknown subject {name!r}, not in {study} (it has {len(subjects)} "
             f"subjects with results){more}"
         )
     chosen = set(listed)

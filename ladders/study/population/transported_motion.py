@@ -1,7 +1,8 @@
 """The transported motion of a cohort on the atlas, read from a study's results.
 
 For every transport method of the study (the pole ladder with and without
-residuals, the fanning scheme or the SVF conjugation) and every ``alpha^2``, a
+residuals, the deformation model's own: the fanning scheme, the SVF conjugation)
+and every ``alpha^2``, a
 :class:`TransportedMotion` stacks the subjects' transported motion on the atlas:
 the displacement ``T' - T`` of every atlas vertex, the local area strain from
 ``T`` to ``T'``, the normal wall motion from ``T`` to ``T'`` (computed when first
@@ -95,8 +96,8 @@ class TransportedMotion:
     method : str
         A transport method of the study, or ``"none"``.
     deformation : str
-        ``"lddmm"`` or ``"svf"`` (the study's space; also for ``"none"``, whose
-        values do not depend on it).
+        The study's deformation model (``"lddmm"``, ``"svf"``, any registered name;
+        also for ``"none"``, whose values do not depend on it).
     alpha2 : float or None
         None for ``"none"``.
     subjects : tuple of str
@@ -212,7 +213,7 @@ class StudyResults:
 
     @property
     def deformation(self) -> str:
-        """``"lddmm"`` or ``"svf"``."""
+        """The deformation model's name (``"lddmm"`` for results written before it was recorded)."""
         return self.config.get("config", {}).get("deformation", "lddmm")
 
 
@@ -319,13 +320,14 @@ def load_study_results(output) -> list[StudyResults]:
 def load_transported_motion(output) -> list[TransportedMotion]:
     """The transported motions of every configuration in a study's output folder.
 
-    With ``--deformation both`` the folder holds ``lddmm/`` and ``svf/``; pass
-    either or the parent (both are read). The ``"none"`` motion appears once.
+    With several models (``--deformation lddmm,svf``, ``both``) the folder holds one
+    study per model (``lddmm/``, ``svf/``, ...); pass one of them or the parent (every
+    one is read, in the order of their names). The ``"none"`` motion appears once.
     """
     output = Path(output)
     folders = [output]
     if not (output / "results").is_dir():
-        folders = [p for p in (output / "lddmm", output / "svf") if (p / "results").is_dir()]
+        folders = sorted(p for p in output.iterdir() if (p / "results").is_dir())
         if not folders:
             folders = [output]  # load_study_results names the problem
     motions: list[TransportedMotion] = []

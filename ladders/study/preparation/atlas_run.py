@@ -32,6 +32,7 @@ from .landmarks import (
     LandmarkError,
     atlas_landmarks_path,
     read_landmarks,
+    refuse_unknown_subjects,
     write_landmarks,
 )
 
@@ -52,7 +53,9 @@ def _landmark_list(landmarks, meshes, inputs: AtlasInputs):
         if not isinstance(meshes, str | Path) or not (Path(meshes) / LANDMARKS_FILE).is_file():
             return None, None
         landmarks = Path(meshes) / LANDMARKS_FILE
-    table = dict(landmarks) if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    table = landmarks if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    refuse_unknown_subjects(table, [*inputs.names, *inputs.skipped], "the table given")
+    table = dict(table)
     missing = [n for n in inputs.names if n not in table]
     if missing:
         raise LandmarkError(f"landmarks: no row for subject(s) {missing} in {landmarks}")

@@ -56,6 +56,7 @@ from .landmarks import (
     atlas_landmarks_path,
     check_landmarks,
     read_landmarks,
+    refuse_unknown_subjects,
 )
 from .quality_table import write_quality_table
 from .surface_distance import surface_distances
@@ -229,7 +230,9 @@ def _subject_landmarks(landmarks, meshes, entries) -> dict | None:
         if isinstance(meshes, dict) or not (Path(meshes) / LANDMARKS_FILE).is_file():
             return None
         landmarks = Path(meshes) / LANDMARKS_FILE
-    table = dict(landmarks) if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    table = landmarks if isinstance(landmarks, dict) else read_landmarks(landmarks)
+    refuse_unknown_subjects(table, entries, "the table given")
+    table = dict(table)
     missing = [n for n in entries if n not in table]
     if missing:
         raise LandmarkError(

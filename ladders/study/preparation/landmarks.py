@@ -25,11 +25,12 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ladders.tables import Column, TableDict, locate, read_table
 
 from ..errors import CohortError
 from ..files import atomic_write_text
@@ -47,12 +48,14 @@ __all__ = [
     "check_landmarks",
     "axial_angle",
     "atlas_landmarks_path",
+    "refuse_unknown_subjects",
 ]
 
 #: The table's default file name in a folder of meshes.
 LANDMARKS_FILE = "landmarks.csv"
 _NAMES = ("apex", "base", "septum")
 LANDMARK_COLUMNS = ("subject", *(f"{n}_{c}" for n in _NAMES for c in "xyz"))
+_TABLE_COLUMNS = (Column("subject"), *(Column(c, "number") for c in LANDMARK_COLUMNS[1:]))
 
 
 def atlas_landmarks_path(atlas) -> Path:
@@ -183,45 +186,39 @@ def read_landmarks(path) -> dict:
     Raises
     ------
     LandmarkError
-        An unreadable file, a missing column, a duplicated subject, a value that is
-        not a finite number or landmarks without a frame; the message names the
-        file, the row and the column.
+        An unreadable file, a missing or unused column, a duplicated subject, a value
+        that is not a finite number (:func:`ladders.tables.read_table`) or landmarks
+        without a frame; the message names the file, the line and the column.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise LandmarkError(f"landmarks: cannot read {path}: {exc}") from None
-    reader = csv.DictReader(io.StringIO(text))
-    header = [h.strip() for h in reader.fieldnames or []]
-    missing = [c for c in LANDMARK_COLUMNS if c not in header]
-    if missing:
-        raise LandmarkError(f"landmarks {path}: missing column(s) {missing}; expected {list(LANDMARK_COLUMNS)}")  # fmt: skip
-    table = {}
-    for line, row in enumerate(reader, start=2):
-        row = {k.strip(): (v or "").strip() for k, v in row.items() if k is not None}
-        name = row["subject"]
-        if not name:
-            raise LandmarkError(f"landmarks {path}, line {line}: empty subject")
-        if name in table:
-            raise LandmarkError(f"landmarks {path}, line {line}: subject {name!r} appears twice")
-        values = []
-        for column in LANDMARK_COLUMNS[1:]:
-            try:
-                value = float(row[column])
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise LandmarkError(
-                    f"landmarks {path}, line {line}, subject {name!r}: {column}: expected a "
-                    f"finite number, got {row[column]!r}"
-                )
-            values.append(value)
+    table = read_table(path, _TABLE_COLUMNS, what="landmark table", key=("subject",),
+                       error=LandmarkError)  # fmt: skip
+    out = TableDict({}, table)
+    for i, row in enumerate(table.rows):
+        values = [row[column] for column in LANDMARK_COLUMNS[1:]]
         try:
-            table[name] = Landmarks.from_array(np.reshape(values, (3, 3)))
+            out[row["subject"]] = Landmarks.from_array(np.reshape(values, (3, 3)))
         except LandmarkError as exc:
-            raise LandmarkError(f"landmarks {path}, subject {name!r}: {exc}") from None
-    return table
+            raise table.error(i, None, f"subject {row['subject']!r}: {exc}") from None
+    return out
+
+
+def refuse_unknown_subjects(table: dict, subjects, source) -> None:
+    """Refuse a row of a landmark table that names none of ``subjects`` nor the atlas (a
+    row that would be ignored: a typo, or another cohort's table), naming its line.
+
+    Raises
+    ------
+    LandmarkError
+    """
+    known = set(subjects) | {"atlas"}
+    unknown = [name for name in table if name not in known]
+    if unknown:
+        where = locate(table, "subject", unknown[0], f"landmarks {source}")
+        shown = ", ".join(sorted(known - {"atlas"})[:6])
+        raise LandmarkError(
+            f"{where}: unknown subject {unknown[0]!r}: no such subject among the meshes "
+            f"({shown}{' ...' if len(known) > 7 else ''})"
+        )
 
 
 def check_landmarks(landmarks: Landmarks, vertices, faces, tolerance: float, name: str) -> None:

@@ -1,10 +1,11 @@
-"""Reporting the study: tables, paired statistics, figures and the LDDMM-SVF comparison.
+"""Reporting the study: tables, paired statistics, figures and the comparison of models.
 
 - :mod:`.report`: the Table-1-style summary and :func:`write_report`;
 - :mod:`.statistics`: the tidy table and the paired comparison;
 - :mod:`.figures`: Fig. 4, Fig. 5a and Fig. 5b;
 - :mod:`.bullseye`: the AHA 17-segment bull's-eye plot;
-- :mod:`.deformation_comparison`: LDDMM against SVF on the same subjects;
+- :mod:`.deformation_comparison`: deformation models against the first (e.g. SVF
+  against LDDMM) on the same subjects;
 - :mod:`.rows`: the typed rows of those tables.
 """
 
@@ -14,6 +15,7 @@ from .deformation_comparison import (
     comparison_csv,
     comparison_markdown,
     write_deformation_comparison,
+    write_model_comparison,
 )
 from .report import summarize, summary_markdown, terminal_summary, write_report
 from .rows import DeformationComparisonRow, PairedComparison, PairedRow, SummaryRow
@@ -31,6 +33,7 @@ __all__ = [
     "tidy_rows",
     "compare_deformations",
     "write_deformation_comparison",
+    "write_model_comparison",
     "comparison_csv",
     "comparison_markdown",
     "SummaryRow",

@@ -12,7 +12,7 @@ from ..files import atomic_write_text
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS, RegistrationCounts
 from .figures import plot_ase, plot_errors, plot_maps
 from .rows import PairedRow, SummaryRow
-from .selection import LABELS, alpha_values, collect, row_label, transport_rows
+from .selection import LABELS, alpha_values, collect, other_rows, row_label, skipped_transports
 from .statistics import paired_csv, paired_statistics, tidy_csv, tidy_rows
 
 __all__ = [
@@ -22,6 +22,7 @@ __all__ = [
     "paired_markdown",
     "failures_markdown",
     "convergence_markdown",
+    "skipped_markdown",
     "write_report",
 ]
 
@@ -43,14 +44,14 @@ def summarize(results: list) -> list[SummaryRow]:
     -------
     list of SummaryRow
         One row per ``(alpha2, measure, variant)`` with ``mean``, ``std``, ``n``;
-        ``variant`` is ``"residual"``, ``"no_residual"``, the third transport
-        method (its ASE) or ``"both"`` (the registration measures).
+        ``variant`` is ``"residual"``, ``"no_residual"``, the model's own transport
+        method (its ASE; none for a model without one) or ``"both"`` (the registration
+        measures).
     """
     if not any(r.pairs for r in results):
         return []
     measures = [(name, v, v) for v in VARIANTS for name in (*ERROR_NAMES, "ase")]
-    other = transport_rows(results)[-1]
-    measures += [("ase", other, other)]
+    measures += [("ase", other, other) for other in other_rows(results)]
     measures += [(name, VARIANTS[0], "both") for name in REGISTRATION_MEASURES]
     rows = []
     for a2 in alpha_values(results):
@@ -95,11 +96,22 @@ def _means(rows: list[SummaryRow]) -> dict:
     return {(r.alpha2, r.measure, r.variant): r.mean for r in rows}
 
 
+def _others(rows: list[SummaryRow]) -> list[str]:
+    """The rows' transport methods that are not a variant's pole ladder, in order."""
+    return list(dict.fromkeys(r.variant for r in rows if r.variant not in (*VARIANTS, "both")))
+
+
+def skipped_markdown(results: list) -> str:
+    """One line per transport the deformation model does not have, with the reason
+    (an empty string when it has them all)."""
+    skipped = skipped_transports(results)
+    return "".join(f"Not run: {row_label(m)} ({why}).\n" for m, why in skipped.items())
+
+
 def summary_markdown(rows: list[SummaryRow], unit: str) -> str:
     """A Table-1-style Markdown table: mean errors per ``alpha^2``, residual vs no residual."""
     alphas = sorted({r.alpha2 for r in rows})
     get = _means(rows)
-    other = next(r.variant for r in rows if r.variant not in (*VARIANTS, "both"))
     head = "| Error type | " + " | ".join(
         f"a²={a:g} Residual | a²={a:g} No residual" for a in alphas
     )
@@ -110,7 +122,7 @@ def summary_markdown(rows: list[SummaryRow], unit: str) -> str:
         for a in alphas:
             cells += [_cell(get, (a, name, v)) for v in VARIANTS]
         lines.append(f"| {LABELS[name]} | " + " | ".join(cells) + " |")
-    single = [("ase", other, f"Area strain error ({row_label(other)})")]
+    single = [("ase", o, f"Area strain error ({row_label(o)})") for o in _others(rows)]
     single += [(name, "both", label) for name, label in _REGISTRATION_LABELS.items()]
     for name, variant, label in single:
         cells = []
@@ -124,11 +136,12 @@ def terminal_summary(rows: list[SummaryRow], unit: str, n_subjects: int) -> str:
     """The summary in at most 100 columns: one line per ``alpha^2``, two tables.
 
     Each cell of the first table holds the mean with and without residuals;
-    the second holds the third transport's ASE and the registration measures.
+    the second holds the model's own transport's ASE (when it has one) and the
+    registration measures.
     """
     alphas = sorted({r.alpha2 for r in rows})
     get = _means(rows)
-    other = next(r.variant for r in rows if r.variant not in (*VARIANTS, "both"))
+    others = _others(rows)
     names = {"midpoint_distance": "midpoint", "centrality": "centrality",
              "involutivity": "involutivity", "transvectivity": "transvect.",
              "ase": "ASE pole ladder"}  # fmt: skip
@@ -140,10 +153,10 @@ def terminal_summary(rows: list[SummaryRow], unit: str, n_subjects: int) -> str:
         cells = [f"{_cell(get, (a, n, 'residual'))} / {_cell(get, (a, n, 'no_residual'))}"
                  for n in names]  # fmt: skip
         lines.append(f"{a:<7g} | " + " | ".join(f"{c:<15}" for c in cells))
-    heads = [f"ASE {other}", *_REGISTRATION_LABELS.values()]
+    heads = [*(f"ASE {o}" for o in others), *_REGISTRATION_LABELS.values()]
     lines += ["", "α²      | " + " | ".join(f"{h:<15}" for h in heads)]
     for a in alphas:
-        cells = [_cell(get, (a, "ase", other))]
+        cells = [_cell(get, (a, "ase", o)) for o in others]
         cells += [_cell(get, (a, n, "both")) for n in _REGISTRATION_LABELS]
         lines.append(f"{a:<7g} | " + " | ".join(f"{c:<15}" for c in cells))
     return "\n".join(line.rstrip() for line in lines) + "\n"
@@ -240,6 +253,8 @@ def write_report(
     unit = unit or ok[0].pairs[0].unit
     rows, paired = summarize(results), paired_statistics(results, seed=0)
     text = summary_markdown(rows, unit) + "\n" + (f"{units}\n\n" if units else "")
+    if skipped_markdown(results):
+        text += skipped_markdown(results) + "\n"
     text += convergence_markdown(results, stopping) + "\n"
     text += paired_markdown(paired, unit)
     if failures_markdown(results):

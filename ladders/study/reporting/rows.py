@@ -1,4 +1,4 @@
-"""The typed rows of the study's tables: summaries, paired comparisons, LDDMM against SVF.
+"""The typed rows of the study's tables: summaries, paired comparisons, one model against another.
 
 Frozen dataclasses of numbers and strings (``None`` where a value cannot be
 computed, never NaN), each with ``as_dict()`` for CSV writers and ``fields()`` for
@@ -87,19 +87,34 @@ class PairedRow(_Row):
 
 @dataclass(frozen=True)
 class DeformationComparisonRow(_Row):
-    """One measure at one ``alpha^2`` for one variant, LDDMM against SVF on the same subjects.
+    """One measure at one ``alpha^2`` for one variant, a deformation model against a
+    reference model on the same subjects (e.g. SVF against LDDMM).
 
-    ``median_difference`` and its interval are SVF minus LDDMM per subject.
+    ``median_difference`` and its interval are ``model`` minus ``reference`` per subject.
+    The means and the fraction are also read by the models' names:
+    ``row.mean_lddmm``, ``row.mean_svf``, ``row.fraction_svf_lower``.
     """
 
     alpha2: float
     variant: str
     measure: str
     n: int
-    mean_lddmm: float | None
-    mean_svf: float | None
-    fraction_svf_lower: float | None
+    reference: str
+    model: str
+    mean_reference: float | None
+    mean_model: float | None
+    fraction_model_lower: float | None
     median_difference: float | None
     ci_low: float | None
     ci_high: float | None
     wilcoxon_p: float | None
+
+    def __getattr__(self, name: str):
+        fields_ = self.__dict__
+        if name.startswith("mean_") and fields_.get("reference") == name[5:]:
+            return fields_["mean_reference"]
+        if name.startswith("mean_") and fields_.get("model") == name[5:]:
+            return fields_["mean_model"]
+        if name == f"fraction_{fields_.get('model')}_lower":
+            return fields_["fraction_model_lower"]
+        raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")

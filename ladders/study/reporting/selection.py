@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..running.results import POLE_LADDER, TRANSPORT_LABELS, VARIANTS
+from ..running.results import POLE_LADDER, VARIANTS, method_label
 
 __all__ = [
     "LABELS",
@@ -12,6 +12,8 @@ __all__ = [
     "alpha_values",
     "collect",
     "transport_rows",
+    "other_rows",
+    "skipped_transports",
     "row_label",
     "representative_subject",
 ]
@@ -40,15 +42,26 @@ def collect(results: list, alpha2: float, row: str, measure: str) -> np.ndarray:
 
 
 def transport_rows(results: list) -> list[str]:
-    """The rows of the transports: the two variants (their pole ladders), then the third
-    method of the results (``"fanning"`` or ``"svf_conjugation"``)."""
+    """The rows of the transports: the two variants (their pole ladders), then the model's
+    own transport where it has one (``"fanning"``, ``"svf_conjugation"``, ...)."""
     first = next(p for r in results for p in r.pairs)
-    return [*VARIANTS, first.other_transport.method]
+    others = [t.method for t in first.transports if t.method not in POLE_LADDER.values()]
+    return [*VARIANTS, *others]
+
+
+def other_rows(results: list) -> list[str]:
+    """The transport rows that are not a pole ladder (none, or the model's own)."""
+    return transport_rows(results)[len(VARIANTS) :]
+
+
+def skipped_transports(results: list) -> dict[str, str]:
+    """``method -> reason`` of the transports the model does not have (from any pair)."""
+    return {s.method: s.reason for r in results for p in r.pairs for s in p.skipped_transports}
 
 
 def row_label(row: str) -> str:
     """What the transport of a row is, e.g. ``"pole ladder, with residuals"``."""
-    return TRANSPORT_LABELS[VARIANT_METHOD.get(row, row)]
+    return method_label(VARIANT_METHOD.get(row, row))
 
 
 def representative_subject(results: list, alpha2: float):

@@ -12,7 +12,7 @@ from scipy.stats import wilcoxon
 
 from ..running.results import ERROR_NAMES, REGISTRATION_MEASURES, VARIANTS
 from .rows import PairedComparison, PairedRow
-from .selection import alpha_values, transport_rows
+from .selection import alpha_values, other_rows
 
 __all__ = [
     "MEASURES",
@@ -34,8 +34,9 @@ def tidy_rows(results: list, unit: str | None = None) -> list[dict]:
 
     Variants ``residual`` and ``no_residual`` carry the four errors and the ASE
     of the pole ladder, and the measures of the registration ``T -> S``
-    (the same values in both, since the registration is shared); the third
-    transport method (``fanning`` or ``svf_conjugation``) carries its ASE.
+    (the same values in both, since the registration is shared); the model's own
+    transport method (``fanning``, ``svf_conjugation``, ...; none for a model without
+    one) carries its ASE.
     ``converged`` is 1.0 or 0.0.
 
     Parameters
@@ -48,10 +49,10 @@ def tidy_rows(results: list, unit: str | None = None) -> list[dict]:
     if not any(r.pairs for r in results):
         return []
     rows = []
-    other = transport_rows(results)[-1]
+    others = other_rows(results)
     for r in results:
         for pair in r.pairs:
-            for variant in (*VARIANTS, other):
+            for variant in (*VARIANTS, *others):
                 for m in MEASURES if variant in VARIANTS else ("ase",):
                     rows.append(
                         {

@@ -7,15 +7,17 @@ every ``alpha^2`` of a sweep, with and without residuals:
   transvectivity), through the generic :func:`ladders.symmetry_errors`;
 * the registration error and RKHS norm of ``T -> S`` and the inverse consistency;
 * the pole-ladder transport of the deformation ``S -> S'`` to the atlas
-  (Algorithm 1: ``T' = s_T o s_M (S')``), and the fanning scheme's transport (the
-  SVF pole ladder by conjugation in the SVF study);
+  (Algorithm 1: ``T' = s_T o s_M (S')``), and the model's own transport where it
+  has one (the fanning scheme for LDDMM, the SVF pole ladder by conjugation for
+  SVF; a model without one has it recorded as skipped, with the reason);
 * the local area strain between ``S`` and ``S'`` and between ``T`` and ``T'``,
   and the area strain error ASE.
 
-Registrations are cached by the LDDMM space, so every registration the
-errors and the ladders share is computed once. :func:`compute_pair` is the one
-computation of a (subject, ``alpha^2``) pair; the results are the typed
-:class:`~ladders.study.running.results.PairResult`.
+The deformation model is any registered :class:`~ladders.study.deformations.DeformationModel`
+(``StudyConfig.deformation``); the study asks it for nothing else. The kernel models
+cache their registrations, so every registration the errors and the ladders share is
+computed once. :func:`compute_pair` is the one computation of a (subject, ``alpha^2``)
+pair; the results are the typed :class:`~ladders.study.running.results.PairResult`.
 """
 
 from __future__ import annotations
@@ -29,25 +31,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from manifolds.errors import ConvergenceWarning
-from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings, SVFLandmarks, group_pole_ladder
+from manifolds.lddmm import RegistrationSettings
 from manifolds.point_distance import point_distance
-from manifolds.residual import ResidualAugmented
 
-from ...fanning import fanning_transport
 from ...symmetry_errors import symmetry_errors
 from ..area_strain import area_strain, area_strain_error
 from ..cohort import Subject
+from ..default_registration import DEFAULT_REGISTRATION
+from ..deformations import DeformationModel, DeformationModelError, deformation_model
 from ..meshes.mesh_outputs import MESH_OUTPUT_FORMATS, TransportShapes, write_subject_meshes
 from ..volume import enclosed_volume
 from .results import (
     ERROR_NAMES,
-    FANNING,
     POLE_LADDER,
-    SVF_CONJUGATION,
     VARIANTS,
     PairResult,
     RegistrationCounts,
     RegistrationSummary,
+    SkippedTransport,
     SubjectResults,
     TransportResult,
     VariantErrors,
@@ -71,22 +72,6 @@ UNITS = {
 }
 
 
-#: Registration settings of the default study (``docs/developer_notes.md``, "Settings chosen by
-#: measurement"): a kernel of width ``sigma = 10`` mm on control points at the shapes'
-#: vertices, a farthest-point sample of the atlas at a spacing of ``0.7 sigma`` (143
-#: points on the built-in atlas) used on every shape (:func:`make_space`), 10 Euler
-#: steps, L-BFGS-B stopped when the deformed template moves by less than 1e-4 mm
-#: (per-vertex RMS) per iteration.
-DEFAULT_REGISTRATION = RegistrationSettings(
-    sigma=10.0,
-    control_points="vertices",
-    integrator="euler",
-    stopping="shape",
-    shape_tol=1e-4,
-    max_iter=5000,
-)
-
-
 @dataclass(frozen=True)
 class StudyConfig:
     """Parameters of the study (all of them enter the results' hash).
@@ -105,12 +90,16 @@ class StudyConfig:
     fanning_steps : int
         Steps of the fanning scheme (with the space's integrator; equal to the
         registration's ``n_steps``, the fanning follows the space's own discrete geodesic).
-    deformation : str
-        ``"lddmm"`` (:class:`~manifolds.lddmm.LDDMMLandmarks`) or ``"svf"``
-        (:class:`~manifolds.lddmm.SVFLandmarks`). The third transport of the study
-        is the fanning scheme (``"fanning"``) with LDDMM, which has a flow of
-        momenta, and the SVF pole ladder by conjugation (``"svf_conjugation"``,
-        ``exp(-v/2) o exp(u) o exp(v/2)``, ``docs/svf.md``) with SVF.
+    deformation : str or DeformationModel
+        The name of a registered deformation model
+        (:func:`~ladders.study.deformations.deformation_names`: ``"lddmm"``,
+        :class:`~manifolds.lddmm.LDDMMLandmarks`; ``"svf"``,
+        :class:`~manifolds.lddmm.SVFLandmarks`; any a user registers), or a model
+        itself; the field keeps its name and :attr:`model` the model. The third
+        transport of the study is the model's own: the fanning scheme
+        (``"fanning"``) with LDDMM, which has a flow of momenta, the SVF pole ladder
+        by conjugation (``"svf_conjugation"``, ``exp(-v/2) o exp(u) o exp(v/2)``,
+        ``docs/svf.md``) with SVF, none (recorded as skipped) for a model without one.
     distance : str
         Unit of the errors, the registration error and the inverse consistency:
         ``"rms"`` (per-vertex RMS distance, the paper's mm), ``"frobenius"`` or ``"mean"``.
@@ -118,6 +107,9 @@ class StudyConfig:
         Start ``Log_M(s_M(S'))`` (involutivity) from its symmetric counterpart
         ``-Log_M(S')`` (:func:`ladders.symmetry_errors`, ``warm_start``) instead of
         the linearised start.
+    model : DeformationModel
+        The model of ``deformation`` (set from it, not compared; pickled with the
+        configuration, so the processes of a parallel study run the same model).
     """
 
     registration: RegistrationSettings = DEFAULT_REGISTRATION
@@ -126,6 +118,7 @@ class StudyConfig:
     deformation: str = "lddmm"
     distance: str = "rms"
     warm_starts: bool = False
+    model: DeformationModel = dataclasses.field(init=False, compare=False, repr=False)
 
     def __post_init__(self):
         """Every field checked here, so that a bad one stops a study before any registration."""
@@ -146,11 +139,12 @@ class StudyConfig:
         if len(set(alpha2)) != len(alpha2):
             raise ValueError(f"StudyConfig.alpha2: values repeated in {list(alpha2)}")
         object.__setattr__(self, "alpha2", alpha2)
-        if self.deformation not in DEFORMATIONS:
-            raise ValueError(
-                f"StudyConfig.deformation: expected one of {sorted(DEFORMATIONS)}, got "
-                f"{self.deformation!r}"
-            )
+        try:
+            model = deformation_model(self.deformation)
+        except DeformationModelError as exc:
+            raise ValueError(f"StudyConfig.{exc}") from None
+        object.__setattr__(self, "deformation", model.name)
+        object.__setattr__(self, "model", model)
         if self.distance not in UNITS:
             raise ValueError(
                 f"StudyConfig.distance: expected one of {sorted(UNITS)}, got {self.distance!r}"
@@ -169,15 +163,16 @@ class StudyConfig:
         and overrides ``sigma`` and ``max_iter`` of :data:`DEFAULT_REGISTRATION`
         (or of ``registration=`` when given).
         """
-        own = {f.name for f in dataclasses.fields(cls)}
+        own = {f.name for f in dataclasses.fields(cls) if f.init}
         study = {k: v for k, v in fields.items() if k in own}
         changes = {k: v for k, v in fields.items() if k not in own}
         base = study.pop("registration", DEFAULT_REGISTRATION)
         return cls(registration=base.replace(**changes), **study)
 
     def as_dict(self) -> dict:
-        """JSON-ready fields; the registration settings as their own dict and key."""
-        return {
+        """JSON-ready fields; the registration settings as their own dict and key; the
+        model's own settings (:meth:`DeformationModel.settings`) when it has any."""
+        out = {
             "registration": self.registration.as_dict(),
             "registration_key": self.registration.key(),
             "alpha2": [float(a) for a in self.alpha2],
@@ -186,28 +181,16 @@ class StudyConfig:
             "distance": self.distance,
             "warm_starts": self.warm_starts,
         }
-
-
-#: The deformation spaces of the study, by ``StudyConfig.deformation``.
-DEFORMATIONS = {"lddmm": LDDMMLandmarks, "svf": SVFLandmarks}
+        model_settings = self.model.settings()
+        if model_settings:  # absent for the built-in models: their results' keys stay
+            out["deformation_settings"] = model_settings
+        return out
 
 
 def make_space(config: StudyConfig, template: np.ndarray, alpha2: float):
-    """The LDDMM or SVF space (``config.deformation``) of a study at one ``alpha^2``.
-
-    With the ``"vertices"`` policy the sample of vertices is drawn once, on
-    ``template`` (the atlas), and used for every shape of the study
-    (:meth:`~manifolds.lddmm.RegistrationSettings.fix_control_point_indices`): the
-    control points are the same material points on ``T``, ``S``, ``S'``, ``M`` and
-    the reflected shapes.
-    """
-    k, d = template.shape
-    return DEFORMATIONS[config.deformation](
-        n_landmarks=k,
-        dim=d,
-        alpha=float(np.sqrt(alpha2)),
-        settings=config.registration.fix_control_point_indices(template),
-    )
+    """The space of ``config.model`` on ``template`` (the atlas) at one ``alpha^2``
+    (:meth:`~ladders.study.deformations.DeformationModel.make_space`)."""
+    return config.model.make_space(np.asarray(template, dtype=float), alpha2, config.registration)
 
 
 def _check_alpha2(alpha2, name: str = "alpha2") -> float:
@@ -229,52 +212,34 @@ def _counted_convergence_warnings():
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
-def _other_transport(config, space, t, s, s2) -> tuple[str, np.ndarray, np.ndarray | None]:
-    """The fanning scheme (LDDMM) or the SVF pole ladder by conjugation (SVF).
-
-    Returns the method, ``T'`` and the transported momenta at the atlas's control
-    points (None for the conjugation, which is no tangent of the space at ``T``).
-    """
-    if config.deformation == "svf":  # exp(-v/2) o exp(u) o exp(v/2) applied to T
-        t_other = group_pole_ladder(space, t, space.log(t, s), space.log(s, s2), base=s)
-        return SVF_CONJUGATION, t_other, None
-    # Transport Log_S(S') along the geodesic S -> T, then shoot the atlas with it.
-    fan = fanning_transport(space, s, t, space.log(s, s2), n_steps=config.fanning_steps)
-    t_other = space.shoot(t, fan.momenta, control_points=fan.control_points)
-    return FANNING, t_other, _at_atlas_control_points(space, t, fan.control_points, fan.momenta)
+def _own_transport(config, space, t, s, s2):
+    """The model's own transport: ``(shapes, tangent)``, or ``(SkippedTransport, None)``
+    when the model has none (:class:`NotImplementedError`, its message the reason)."""
+    model = config.model
+    try:
+        out = model.transport(space, t, s, s2, config.fanning_steps)
+    except NotImplementedError as exc:
+        return SkippedTransport(model.transport_method, str(exc)), None
+    return TransportShapes(model.transport_method, np.asarray(out.transported, dtype=float)), (
+        out.tangent
+    )
 
 
-def _at_atlas_control_points(space, t, control_points, momenta) -> np.ndarray | None:
-    """Momenta at ``c(T)`` whose velocity there equals that of ``momenta`` at ``control_points``.
-
-    The fanning scheme's momenta live at the control points it carried along the
-    geodesic ``S -> T``, close to but not at the atlas's own: the kernel field they
-    define is sampled at ``c(T)`` and solved back to momenta there (the RKHS
-    projection), so that every subject's tangent is at the same control points.
-    """
-    if space.optimize_control_points:
-        return None
-    cp = space.control_points(t)
-    velocity = space.kernel.convolve(cp, np.asarray(control_points), np.asarray(momenta))
-    return space.kernel_solve(cp, velocity)
-
-
-def _pole_ladder_tangent(space, sp, t, reflected) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """Momenta and residual of the pole ladder's tangent ``-Log_T(T'')`` (cached registration)."""
+def _pole_ladder_tangent(config, space, sp, t, reflected):
+    """Coordinates and residual of the pole ladder's tangent ``-Log_T(T'')`` (cached registration);
+    a residual space whose tangents are not :class:`~manifolds.ResidualTangent` has none."""
     tangent = -sp.log(t, reflected)
-    momenta = tangent.tangent
-    if not isinstance(momenta, np.ndarray):  # optimised control points: not at c(T)
-        momenta = None
-    residual = tangent.residual if sp.use_residuals else None
-    return momenta, residual
+    coordinates = config.model.tangent_coordinates(space, t, getattr(tangent, "tangent", tangent))
+    residual = getattr(tangent, "residual", None) if getattr(sp, "use_residuals", False) else None
+    return coordinates, residual
 
 
 def _transports(config, space, dist, atlas, faces, subject, las_subject):
-    """Symmetry errors of both variants and the three transports, with their shapes."""
+    """Symmetry errors of both variants and the transports, with their shapes."""
     t, s, s2 = atlas, subject.ed, subject.es
-    errors, transports, shapes, tangents = [], [], [], []
+    errors, transports, shapes, tangents, skipped = [], [], [], [], []
     for variant in VARIANTS:
-        sp = ResidualAugmented(space, use_residuals=variant == "residual")
+        sp = config.model.residual_space(space, use_residuals=variant == "residual")
         errs = symmetry_errors(sp, t, s, s2, distance=dist, warm_start=config.warm_starts)
         errors.append(VariantErrors(variant, *(float(getattr(errs, n)) for n in ERROR_NAMES)))
         points = errs.points  # T' = s_T(s_M(S')), Algorithm 1
@@ -286,10 +251,13 @@ def _transports(config, space, dist, atlas, faces, subject, las_subject):
                 points["reflected"],
             )
         )
-        tangents.append(_pole_ladder_tangent(space, sp, t, points["reflected"]))
-    method, t_other, momenta = _other_transport(config, space, t, s, s2)
-    shapes.append(TransportShapes(method, t_other))
-    tangents.append((momenta, None))
+        tangents.append(_pole_ladder_tangent(config, space, sp, t, points["reflected"]))
+    own, tangent = _own_transport(config, space, t, s, s2)
+    if isinstance(own, SkippedTransport):
+        skipped.append(own)
+    else:
+        shapes.append(own)
+        tangents.append((tangent, None))
     for shape, (momenta, residual) in zip(shapes, tangents):
         las = area_strain(t, shape.transported, faces)
         ase = area_strain_error(las_subject, las)
@@ -303,7 +271,7 @@ def _transports(config, space, dist, atlas, faces, subject, las_subject):
                 residual=() if residual is None else np.ravel(residual),
             )
         )
-    return errors, transports, shapes
+    return errors, transports, shapes, skipped
 
 
 def compute_pair(
@@ -352,17 +320,20 @@ def compute_pair(
         raise ValueError(f"mesh_format: expected one of {MESH_OUTPUT_FORMATS}, got {mesh_format!r}")
     las_subject = area_strain(subject.ed, subject.es, faces)
     with _counted_convergence_warnings():
+        model = config.model
         space = make_space(config, atlas, alpha2)
         dist = point_distance(config.distance, space.point_shape)
-        reg = space.register(atlas, subject.ed)
+        reg = model.register(space, atlas, subject.ed)
         registration = RegistrationSummary(
             error=float(dist(reg.deformed, subject.ed)),
             rms=float(reg.rms_error),
-            rkhs_norm=float(reg.rkhs_norm),
+            rkhs_norm=float(reg.norm),
             converged=bool(reg.converged),
-            inverse_consistency=float(space.inverse_consistency(atlas, subject.ed, distance=dist)),
+            inverse_consistency=float(
+                model.inverse_consistency(space, atlas, subject.ed, distance=dist)
+            ),
         )
-        errors, transports, shapes = _transports(
+        errors, transports, shapes, skipped = _transports(
             config, space, dist, atlas, faces, subject, las_subject
         )
     result = PairResult(
@@ -375,12 +346,13 @@ def compute_pair(
         errors=tuple(errors),
         transports=tuple(transports),
         las_subject=las_subject,
-        counts=RegistrationCounts.of_space(space),
+        counts=RegistrationCounts.of_counters(model.counts(space)),
         seconds=0.0,
         kernel_backend=config.registration.resolved_backend(),
         displacement_subject=np.ravel(subject.es - subject.ed),
         volume_ratio_subject=enclosed_volume(subject.es, faces)
         / enclosed_volume(subject.ed, faces),
+        skipped_transports=tuple(skipped),
     )
     if meshes is not None:
         write_subject_meshes(meshes, subject, atlas, faces, result, shapes, ext=mesh_format)

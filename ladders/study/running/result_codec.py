@@ -36,8 +36,18 @@ class ResultSchemaError(ValueError):
 
 
 def encode(result: PairResult | FailedPair) -> dict:
-    """The JSON-ready dict of ``result``, with ``schema_version`` and ``status`` first."""
+    """The JSON-ready dict of ``result``, with ``schema_version`` and ``status`` first.
+
+    An optional field (``optional_fields`` of the class) at its default is left out,
+    so a result that does not use it is stored as before the field existed.
+    """
     body = _compact(dataclasses.asdict(result))
+    for f in dataclasses.fields(result):
+        if (
+            f.name in getattr(result, "optional_fields", ())
+            and getattr(result, f.name) == f.default
+        ):
+            body.pop(f.name)
     return {"schema_version": SCHEMA_VERSION, "status": result.status, **body}
 
 
@@ -94,11 +104,13 @@ def decode(data) -> PairResult | FailedPair:
 
 
 def _build(cls, node, path: str):
-    """An instance of the dataclass ``cls`` from the dict ``node`` (every field, no other)."""
+    """An instance of the dataclass ``cls`` from the dict ``node`` (every field, no other;
+    a field of ``cls.optional_fields`` may be absent and is then its default)."""
     if not isinstance(node, dict):
         raise ResultSchemaError(f"{path or 'result'}: expected an object, got {node!r:.40}")
     hints = typing.get_type_hints(cls)
-    names = [f.name for f in dataclasses.fields(cls)]
+    optional = getattr(cls, "optional_fields", ())
+    names = [f.name for f in dataclasses.fields(cls) if f.name in node or f.name not in optional]
     missing = [n for n in names if n not in node]
     extra = sorted(set(node) - set(names))
     if missing or extra:

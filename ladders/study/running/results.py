@@ -19,6 +19,9 @@ Transport methods are named for what they are:
 ``fanning``                    the fanning scheme (LDDMM study)
 ``svf_conjugation``            the SVF pole ladder by conjugation (SVF study)
 =============================  ==================================================
+
+A model's own transport may have another name (its ``transport_method``); one the
+model does not have is a :class:`SkippedTransport` of the pair, with the reason.
 """
 
 from __future__ import annotations
@@ -28,6 +31,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, fields
 
 import numpy as np
+
+from ..deformations import FANNING, SVF_CONJUGATION, transport_label
+from ..deformations.model import COUNTERS
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -42,6 +48,7 @@ __all__ = [
     "RegistrationSummary",
     "RegistrationCounts",
     "TransportResult",
+    "SkippedTransport",
     "PairResult",
     "FailedPair",
     "SubjectResults",
@@ -59,8 +66,6 @@ REGISTRATION_MEASURES = ("registration_error", "registration_norm", "inverse_con
 
 #: The pole ladder's transport method of each variant.
 POLE_LADDER = {variant: f"pole_ladder_{variant}" for variant in VARIANTS}
-FANNING = "fanning"
-SVF_CONJUGATION = "svf_conjugation"
 #: What each transport method is, for tables and figure legends.
 TRANSPORT_LABELS = {
     POLE_LADDER["residual"]: "pole ladder, with residuals",
@@ -154,13 +159,19 @@ class RegistrationCounts:
 
     @classmethod
     def of_space(cls, space) -> RegistrationCounts:
-        """The counters of a :class:`~manifolds.lddmm.KernelLandmarkSpace`."""
+        """The counters a space keeps as attributes (e.g. a
+        :class:`~manifolds.lddmm.KernelLandmarkSpace`; 0 for those it does not keep)."""
+        return cls.of_counters({name: getattr(space, name, 0) for name in COUNTERS})
+
+    @classmethod
+    def of_counters(cls, counters: dict) -> RegistrationCounts:
+        """From a model's counters (:meth:`~ladders.study.deformations.DeformationModel.counts`)."""
         return cls(
-            n_registrations=int(space.n_registrations),
-            non_converged=int(space.n_unconverged),
-            n_iterations=int(space.n_iterations),
-            n_flow_evaluations=int(space.n_flow_evaluations),
-            max_gradient_norm=float(space.max_gradient_norm),
+            n_registrations=int(counters.get("n_registrations", 0)),
+            non_converged=int(counters.get("n_unconverged", 0)),
+            n_iterations=int(counters.get("n_iterations", 0)),
+            n_flow_evaluations=int(counters.get("n_flow_evaluations", 0)),
+            max_gradient_norm=float(counters.get("max_gradient_norm", 0.0)),
         )
 
     @classmethod
@@ -233,7 +244,21 @@ class TransportResult:
     @property
     def label(self) -> str:
         """What the method is, e.g. ``"pole ladder, with residuals"``."""
-        return TRANSPORT_LABELS.get(self.method, self.method)
+        return method_label(self.method)
+
+
+def method_label(method: str) -> str:
+    """What a transport method is: :data:`TRANSPORT_LABELS`, else the registered model's
+    ``transport_label``, else the method's name."""
+    return TRANSPORT_LABELS.get(method) or transport_label(method) or method
+
+
+@dataclass(frozen=True)
+class SkippedTransport:
+    """A transport the pair's deformation model does not have, and why (its message)."""
+
+    method: str
+    reason: str
 
 
 @dataclass(frozen=True)
@@ -266,8 +291,8 @@ class PairResult(_Pair):
     errors : tuple of VariantErrors
         One per variant, in the order of :data:`VARIANTS`.
     transports : tuple of TransportResult
-        The two pole ladders, then the fanning scheme (LDDMM) or the SVF
-        conjugation (SVF).
+        The two pole ladders, then the model's own transport: the fanning scheme
+        (LDDMM), the SVF conjugation (SVF), none when the model has none.
     las_subject : tuple of float
         Local area strain from ``S`` to ``S'``.
     counts : RegistrationCounts
@@ -280,6 +305,9 @@ class PairResult(_Pair):
     volume_ratio_subject : float
         ``V(S') / V(S)``, the volumes enclosed by the subject's meshes
         (:func:`ladders.study.volume.enclosed_volume`): one minus its ejection fraction.
+    skipped_transports : tuple of SkippedTransport
+        The model's transports it does not have (stored only when there is one, so a
+        file written before the field existed reads as none skipped).
     """
 
     settings_key: str
@@ -294,13 +322,17 @@ class PairResult(_Pair):
     kernel_backend: str
     displacement_subject: tuple[float, ...] = ()
     volume_ratio_subject: float = 1.0
+    skipped_transports: tuple[SkippedTransport, ...] = ()
 
     status = "ok"
+    #: Fields a stored result may lack (written before they existed), read as their default.
+    optional_fields = ("skipped_transports",)
 
     def __post_init__(self):
         super().__post_init__()
         object.__setattr__(self, "errors", tuple(self.errors))
         object.__setattr__(self, "transports", tuple(self.transports))
+        object.__setattr__(self, "skipped_transports", tuple(self.skipped_transports))
         object.__setattr__(self, "las_subject", _floats(self.las_subject))
         object.__setattr__(self, "displacement_subject", _floats(self.displacement_subject))
 
@@ -320,9 +352,9 @@ class PairResult(_Pair):
         raise KeyError(f"method: expected one of {known}, got {method!r}")
 
     @property
-    def other_transport(self) -> TransportResult:
-        """The transport that is not a pole ladder: fanning or SVF conjugation."""
-        return next(t for t in self.transports if t.method not in POLE_LADDER.values())
+    def other_transport(self) -> TransportResult | None:
+        """The transport that is not a pole ladder (fanning, SVF conjugation), or None."""
+        return next((t for t in self.transports if t.method not in POLE_LADDER.values()), None)
 
     def measure(self, row: str, name: str) -> float:
         """A number of the result by its row and measure in the tables.

@@ -30,6 +30,7 @@ from ..batch import run_batch
 from ..errors import CohortError
 from ..files import array_digest, atomic_path, atomic_write_text, config_hash
 from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
+from ..recommendations import RECOMMENDED_ALPHA2
 from ..running.pipeline import StudyConfig, make_space
 from .frame_transport import check_frames, transport_frames
 
@@ -130,7 +131,8 @@ def _transport_one(name, frames, atlas, faces, config, use_residuals, settings, 
         x = _load(frames, faces, len(atlas), name)
         fingerprint = _fingerprint(settings, x)
         space = make_space(config, atlas, config.alpha2[0])
-        result = transport_frames(space, atlas, x, use_residuals=use_residuals)
+        result = transport_frames(space, atlas, x, use_residuals=use_residuals,
+                                  model=config.model)  # fmt: skip
         with atomic_path(output / f"{name}.npz") as tmp, open(tmp, "wb") as fh:
             np.savez(fh, transported=result.transported, registration_rms=result.registration_rms,
                      converged=result.converged, seconds=result.seconds,
@@ -148,7 +150,7 @@ def run_cycle_study(
     faces,
     sequences: dict,
     output,
-    alpha2: float = 1.0,
+    alpha2: float = RECOMMENDED_ALPHA2,
     deformation: str = "lddmm",
     use_residuals: bool = True,
     jobs: int = 1,
@@ -166,9 +168,12 @@ def run_cycle_study(
         in order (:func:`read_tracked_frames`); ED first, in the atlas's correspondence.
     output : path
         The folder written (see the module).
-    alpha2 : float, default 1
-        The regularisation ``alpha^2`` of eq. 3.
-    deformation : {"lddmm", "svf"}
+    alpha2 : float, default 100
+        The regularisation ``alpha^2`` of eq. 3; the default is the value for group
+        statistics (:data:`~ladders.study.recommendations.RECOMMENDED_ALPHA2`).
+    deformation : str or DeformationModel
+        A registered deformation model's name (``"lddmm"``, ``"svf"``, any a user
+        registers) or a model.
     use_residuals : bool, default True
     jobs : int, default 1
         Subjects in parallel (joblib processes).

@@ -84,20 +84,26 @@ def _rms(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((a - b) ** 2, axis=-1))))
 
 
-def transport_frames(space, atlas, frames, use_residuals: bool = True) -> FrameTransport:
+def transport_frames(
+    space, atlas, frames, use_residuals: bool = True, model=None
+) -> FrameTransport:
     """Transport every frame's deformation ``Log_S(S_t)`` to ``atlas`` (see the module).
 
     Parameters
     ----------
-    space : manifolds.lddmm.LDDMMLandmarks or SVFLandmarks
-        A landmark space (e.g. :func:`~ladders.study.running.pipeline.make_space`); its
-        registrations are cached, so the midpoint is computed once.
+    space : manifolds.Connection
+        The space of a deformation model (:func:`~ladders.study.running.pipeline.make_space`);
+        the landmark spaces cache their registrations, so the midpoint is computed once.
     atlas : array, shape (k, 3)
         The atlas ``T``.
     frames : array, shape (n_frames, k, 3)
         The subject's frames, ED first, in the atlas's vertex correspondence.
     use_residuals : bool, default True
         The residual-augmented space (the study's "pole ladder, with residuals").
+    model : DeformationModel, optional
+        The model of ``space`` (:class:`~ladders.study.deformations.DeformationModel`),
+        whose ``residual_space`` and ``register`` are used; without it, ``space`` is a
+        landmark space (:class:`~manifolds.lddmm.KernelLandmarkSpace`) and its own are.
 
     Returns
     -------
@@ -106,7 +112,14 @@ def transport_frames(space, atlas, frames, use_residuals: bool = True) -> FrameT
     start = time.perf_counter()
     t = np.asarray(atlas, dtype=np.float64)
     x = check_frames(frames, len(t))
-    sp = ResidualAugmented(space, use_residuals=use_residuals)
+    if model is None:
+        sp, register = ResidualAugmented(space, use_residuals=use_residuals), space.register
+    else:
+        sp = model.residual_space(space, use_residuals=use_residuals)
+
+        def register(template, target):
+            return model.register(space, template, target)
+
     m = sp.midpoint(t, x[0])  # M = Exp_T(1/2 Log_T(S)), one registration
     n = len(x)
     transported = np.empty_like(x)
@@ -115,7 +128,7 @@ def transport_frames(space, atlas, frames, use_residuals: bool = True) -> FrameT
     for k in range(1, n):
         reflected = sp.symmetry(m, x[k])  # T'' = s_M(S_t)
         transported[k] = sp.symmetry(t, reflected)  # T' = s_T(T'')
-        reg = space.register(m, x[k])
+        reg = register(m, x[k])
         rms[k] = _rms(reg.deformed, x[k])
-        converged[k] = bool(reg.converged) and bool(space.register(t, reflected).converged)
+        converged[k] = bool(reg.converged) and bool(register(t, reflected).converged)
     return FrameTransport(transported, rms, converged, time.perf_counter() - start)

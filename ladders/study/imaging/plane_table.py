@@ -1,0 +1,103 @@
+"""The cut-plane table: a plane per image (and per frame of a series) that trims its surface.
+
+A CSV table with the columns ``image,x,y,z,nx,ny,nz`` and an optional ``frame``
+column (0-based): ``image`` names an image file (its name or its path as given) or,
+for a series, its subject or its series' file name; ``x,y,z`` is a point of the plane
+and ``nx,ny,nz`` its normal, in world mm (e.g. the valve plane, the part beyond it
+removed). A row without a frame holds for every frame of its image; a row with one,
+for that frame only (e.g. the valve plane moving with the base, as
+``symladders cohort --cycle`` writes ``valve_planes.csv``). ``symladders mesh`` and
+``symladders track`` read it with :func:`read_plane_table`; a second row for one image
+and frame, a non-numeric value, a column the table does not have and, with
+:func:`check_plane_table`, an image that is not given or a frame beyond its series are
+refused in one line naming the file, the line and the column.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from ladders.tables import Column, Table, read_table
+
+__all__ = [
+    "PLANE_COLUMNS",
+    "read_plane_table",
+    "check_plane_table",
+    "planes_by_image",
+    "plane_for",
+    "image_names",
+]
+
+#: The columns of a cut-plane table (``frame`` optional: empty or absent for every frame).
+PLANE_COLUMNS = (
+    Column("image"),
+    *(Column(name, "number") for name in ("x", "y", "z", "nx", "ny", "nz")),
+    Column("frame", "frame", required=False),
+)
+
+
+def read_plane_table(path) -> Table:
+    """The rows of a cut-plane table (see the module), each image and frame once.
+
+    Raises
+    ------
+    ladders.tables.TableError
+        One line naming the file, the line and the column.
+    """
+    return read_table(path, PLANE_COLUMNS, what="cut-plane table", key=("image", "frame"))
+
+
+def check_plane_table(table: Table, frames: Mapping[str, int | None]) -> None:
+    """Refuse a row naming no image of ``frames`` or a frame outside its image's series.
+
+    Parameters
+    ----------
+    table : Table
+        Of :func:`read_plane_table`.
+    frames : mapping
+        ``{name: frame count}`` of every name an image may be given by (file name, path,
+        subject); ``None`` or 1 for a 3-D image (only frame 0, or no frame).
+
+    Raises
+    ------
+    ladders.tables.TableError
+    """
+    table.refuse_unknown("image", frames, what="image")
+    limits = {name: 1 if n is None else int(n) for name, n in frames.items()}
+    table.refuse_beyond("frame", limits, key="image", what="image")
+
+
+def planes_by_image(table: Table) -> dict[str, dict[str, tuple]]:
+    """``{image: {frame or "all": (x, y, z, nx, ny, nz)}}`` of a cut-plane table."""
+    planes: dict[str, dict[str, tuple]] = {}
+    for row in table.rows:
+        frame = "all" if row["frame"] is None else str(row["frame"])
+        planes.setdefault(row["image"], {})[frame] = tuple(
+            float(row[k]) for k in ("x", "y", "z", "nx", "ny", "nz")
+        )
+    return planes
+
+
+def plane_for(planes: Mapping | None, names, frame: int | None) -> tuple | None:
+    """The plane of an image known by ``names`` at ``frame`` (its own, else its "all"), or None."""
+    if not planes:
+        return None
+    entry = next((planes[n] for n in names if n in planes), None)
+    if entry is None:
+        return None
+    if not isinstance(entry, Mapping):  # one plane for every frame
+        return tuple(entry)
+    plane = entry.get(str(frame), entry.get("all")) if frame is not None else entry.get("all")
+    if plane is None and frame is None:
+        plane = entry.get("0")
+    return None if plane is None else tuple(plane)
+
+
+def image_names(path) -> list[str]:
+    """The names a cut-plane table may give an image file by: its file name, its path, and
+    its subject (the name without ``.nii.gz``, as ``symladders mesh`` names its meshes)."""
+    from .label_images import image_stem
+
+    path = Path(path)
+    return [path.name, str(path), image_stem(path)]
