@@ -121,19 +121,6 @@ def _landmarks(args):
         raise UsageError(f"symladders cycle-analyze: error: {exc}") from None
 
 
-def _check_group_sizes(request, study) -> None:
-    """Two groups of at least 3 of the study's subjects each (``--groups``)."""
-    from ..sequences import load_cycle_motion
-
-    subjects = set(load_cycle_motion(study).subjects)
-    groups = [g for s, g in zip(request.table["subject"], request.table["group"]) if s in subjects]
-    for name in dict.fromkeys(request.table["group"]):
-        if groups.count(name) < 3:
-            raise UsageError(f"symladders cycle-analyze: error: --groups {request.source}: group "
-                             f"{name!r} has {groups.count(name)} subject(s) in the study; each "
-                             "group needs at least 3 subjects")  # fmt: skip
-
-
 def _counts(tests, alpha: float) -> str:
     parts = []
     for summary in ("peak", "time_to_peak", "per_frame", "trajectory"):
@@ -169,7 +156,6 @@ def run_cycle_analyze_command(args) -> int:
             return 0
     groups = None
     if request.groups:
-        _check_group_sizes(request, args.study)
         groups = tuple(dict.fromkeys(request.table["group"]))
         if args.compare is not None:
             groups = tuple(args.compare)

@@ -150,7 +150,7 @@ def analyze_cycle_model(
         The FWER level of the counts and figures.
     groups : (str, str), optional
         The model is two groups of the column ``group`` compared, A against B: their
-        means in the tables and figures.
+        means in the tables and figures; each needs at least 3 of the study's subjects.
     summaries : sequence of str
         The summaries tested (:data:`~.cycle_model.SUMMARIES`).
     progress, figures : bool
@@ -165,6 +165,14 @@ def analyze_cycle_model(
     motion = load_cycle_motion(study)
     model = model_design(table, formula, contrasts, motion.subjects, blocks, source, _STUDY)
     motion = motion.subset(model.kept)
+    labels = None
+    if groups is not None:
+        by_subject = dict(zip([str(s).strip() for s in table["subject"]], table["group"]))
+        labels = np.array([str(by_subject[s]).strip() == groups[0] for s in model.kept])
+        for name, size in ((groups[0], labels.sum()), (groups[1], (~labels).sum())):
+            if size < 3:
+                raise CohortError(f"{source or 'groups'}: group {name!r} has {int(size)} "
+                                  "subject(s) in the study; each group needs at least 3 subjects")  # fmt: skip
     segments, tested = _segments(motion, landmarks, exclude_segments)
     if measure == "rotation" and landmarks is None:
         raise CohortError("measure rotation: needs the atlas's landmarks (--aha), the long axis")
@@ -174,10 +182,6 @@ def analyze_cycle_model(
     except ValueError as exc:
         raise CohortError(str(exc)) from None
     rng = np.random.default_rng(seed)
-    labels = None
-    if groups is not None:
-        by_subject = dict(zip([str(s).strip() for s in table["subject"]], table["group"]))
-        labels = np.array([str(by_subject[s]).strip() == groups[0] for s in model.kept])
     tests = []
     for spec in contrasts:
         result = cycle_model(responses, model.design, spec, n_permutations, rng, tfce=tfce,
