@@ -36,7 +36,7 @@ from ...statistics import Design, check_groups, contrast_matrix, design_matrix
 from ...statistics.permutation_glm import GLMTest
 from ...statistics.tfce import mesh_adjacency
 from ..errors import CohortError
-from ..population.model_comparison import contrast_effects, model_tests
+from ..population.model_comparison import model_tests
 from .cycle_analysis import MEASURES, CycleMotion
 from .cycle_responses import (
     CycleResponses,
@@ -286,11 +286,6 @@ def cycle_model(
         r.times, None, on_atlas.get("trajectory"), tested, r.measure, r.axis, r.min_radius, r.fwhm, name,
         design, r.trajectory.n_components, r.trajectory.explained, segments, segment_tests,
     )  # fmt: skip
-
-
-def effects(tests: CycleTests) -> dict:
-    """``{summary: the contrast's estimate per vertex}`` for a one-row contrast (none for F)."""
-    return contrast_effects({s: t for s, t in tests.tests().items() if s != "trajectory"})
 
 
 def compare_cycles(
