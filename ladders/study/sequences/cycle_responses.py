@@ -22,9 +22,10 @@ default) of the curves' total variance, at least ``min_components`` (2) and at m
 orthogonal to the curve it changes: a curve ``g`` shifted by ``delta`` in time is
 ``g - delta g'`` to first order, and over a periodic cycle ``g'`` is orthogonal to ``g``.
 Curves that differ between subjects mostly by their amplitude put nearly all of their
-variance in one component (the synthetic cohort's, with a tracking-like error: 92 to 96
-%), where a delayed contraction is not; the second component holds it
-(``benchmarks/bench_cycle_model.py`` measures both). The vertices' own components
+variance in one component (the synthetic cohort's, with a tracking-like error: 90 to 96
+%, ``benchmarks/bench_cycle_model.py``), where a delayed contraction is not: with one
+component the trajectory test finds none of a delay of a tenth of the cycle, with two
+most of it (the table ``cycle_model_power`` in ``docs/statistics.md``). The vertices' own components
 differ (each vertex keeps the shape of its own curves); the test of their scores is the
 test of the curves projected on them, and Pillai's trace does not depend on the basis
 chosen within that space.
