@@ -109,7 +109,8 @@ def run_route(work: Path, name: str, n: int, n_frames: int, jobs: int, landmarks
                                                  root / "corresponded", landmarks=table,
                                                  jobs=jobs)),
         ("track", lambda: track_cohort(root / "corresponded", root / "cohort" / "images",
-                                       root / "tracked", 1, TrackingSettings(refine_ed=True),
+                                       root / "tracked", 1,
+                                       TrackingSettings(refine_ed=True, estimate_planes="never"),
                                        jobs=jobs, progress=False)),
     ):  # fmt: skip
         start = time.perf_counter()

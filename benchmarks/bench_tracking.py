@@ -48,9 +48,9 @@ from ladders.study.wall_motion import outward_vertex_normals  # noqa: E402
 
 ACQUISITIONS = {"SAX 1.5 x 1.5 x 8 mm": (1.5, 8.0), "iso 1.5 mm": (1.5, 1.5)}
 METHODS = {
-    "projection": TrackingSettings(),
+    "projection": TrackingSettings(refine_ed=False),
     "projection + refine_ed": TrackingSettings(refine_ed=True),
-    "registration": TrackingSettings(method="registration"),
+    "registration": TrackingSettings(method="registration", refine_ed=False),
     "registration + refine_ed": TrackingSettings(method="registration", refine_ed=True),
 }
 

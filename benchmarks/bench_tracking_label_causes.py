@@ -84,8 +84,9 @@ def _folder(work: Path, variant: str) -> Path:
 
 def _track(meshes: Path, images: Path, out: Path, planes, jobs: int, label: str) -> float:
     start = time.perf_counter()
-    outcome = track_cohort(meshes, images, out, 1, TrackingSettings(refine_ed=True),
-                           cut_planes=planes, jobs=jobs, progress=False)  # fmt: skip
+    settings = TrackingSettings(refine_ed=True, estimate_planes="never")  # planes given or none
+    outcome = track_cohort(meshes, images, out, 1, settings, cut_planes=planes, jobs=jobs,
+                           progress=False)  # fmt: skip
     seconds = time.perf_counter() - start
     if outcome.failed:
         print(f"  {label}: failed {outcome.failed}", flush=True)

@@ -68,8 +68,9 @@ def track_variant(work: Path, label: str, jobs: int) -> None:
     for name in ("cohort", "corresponded"):
         if not (root / name).exists():
             os.symlink((route / name).resolve(), root / name)
+    settings = TrackingSettings(refine_ed=True, estimate_planes="never", **VARIANTS[label])
     track_cohort(route / "corresponded", route / "cohort" / "images", root / "tracked", 1,
-                 TrackingSettings(refine_ed=True, **VARIANTS[label]), jobs=jobs, progress=False)  # fmt: skip
+                 settings, jobs=jobs, progress=False)  # fmt: skip
 
 
 def _tests(motion, patients, region, tested, permutations):

@@ -1,9 +1,12 @@
 """How deep a kernel sum sits below the study's pair computation.
 
 A reader follows ``compute_pair`` down to the compiled loop of a kernel sum: the
-registration (its start and its iterations) must reach it in at most 8 calls of the
+registration (its start and its iterations) must reach it in at most 9 calls of the
 project's own functions, none of them a pure forwarding layer, for the forward pass (the
 Hamiltonian right-hand side) and for the adjoint pass (its vector-Jacobian product).
+The study reaches the space through its deformation model
+(:class:`~ladders.study.deformations.DeformationModel`, which turns the space's
+registration into the study's record): one call, the only one above the space's.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from manifolds.lddmm.settings import RegistrationSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = (str(ROOT / "manifolds"), str(ROOT / "ladders"))
-MAX_CALLS = 8
+MAX_CALLS = 9
 
 
 def _project_chain() -> list[str]:
@@ -65,9 +68,10 @@ def test_the_registrations_reach_a_kernel_sum_in_at_most_8_calls(monkeypatch, su
     config = StudyConfig(registration=RegistrationSettings(sigma=10.0, kernel_backend="numba"))
     compute_pair(config, cohort.atlas, cohort.faces, cohort.subjects[0], 1.0)
     # The registration T -> S of the pair: its start and its iterations.
-    direct = [c for c in chains if c[1:2] == ["KernelLandmarkSpace.register"]]
+    direct = [c for c in chains if c[2:3] == ["KernelLandmarkSpace.register"]]
     assert direct, f"no kernel sum reached from the registration: {chains[:3]}"
     longest = max(direct, key=len)
     assert len(longest) <= MAX_CALLS, " -> ".join(longest)
-    assert longest[:3] == ["compute_pair", "KernelLandmarkSpace.register", "register"]
+    assert longest[:4] == ["compute_pair", "KernelModel.register", "KernelLandmarkSpace.register",
+                           "register"]  # fmt: skip
     assert sum("minimize_lbfgsb" in c for c in direct) > 0.6 * len(direct)

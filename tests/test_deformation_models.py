@@ -98,7 +98,9 @@ def test_registry_names_both_lists_and_refusals():
     assert {"lddmm", "svf"} <= set(deformation_names())
     assert parse_deformations("both") == ("lddmm", "svf")
     assert parse_deformations("svf, lddmm") == ("svf", "lddmm")
-    with pytest.raises(DeformationModelError, match=r"expected one of (.*, )?lddmm, (.*, )?svf.*'nope'"):
+    with pytest.raises(
+        DeformationModelError, match=r"expected one of (.*, )?lddmm, (.*, )?svf.*'nope'"
+    ):
         parse_deformations("lddmm,nope")
     with pytest.raises(DeformationModelError, match="named twice"):
         parse_deformations("lddmm,both")

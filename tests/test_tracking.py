@@ -102,7 +102,8 @@ def _errors(subject, tracked, t):
 
 @pytest.fixture(scope="module")
 def chain(subject, surfaces):
-    return track_surfaces(subject["ed"], subject["faces"], surfaces, TrackingSettings())
+    return track_surfaces(subject["ed"], subject["faces"], surfaces,
+                          TrackingSettings(refine_ed=False))  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -160,8 +161,9 @@ def test_project_ed_measures_the_motion_between_surfaces_extracted_alike(subject
     onto frame 0's surface first, its offset stays out of the motion; kept, it is in every frame."""
     ed, faces = subject["ed"], subject["faces"]
     offset = ed + 0.5 * outward_vertex_normals(ed, faces)
-    kept = track_surfaces(offset, faces, surfaces, TrackingSettings(project_ed=False))
-    moved = track_surfaces(offset, faces, surfaces, TrackingSettings())
+    kept = track_surfaces(offset, faces, surfaces,
+                          TrackingSettings(project_ed=False, refine_ed=False))  # fmt: skip
+    moved = track_surfaces(offset, faces, surfaces, TrackingSettings(refine_ed=False))
     assert np.array_equal(kept.vertices[0], offset)
     assert moved.quality[0]["mean_distance"] < 1e-6
     assert abs(moved.quality[0]["onto_surface_rms"] - 0.5) < 0.25 * VOXEL
@@ -176,7 +178,7 @@ def test_project_ed_measures_the_motion_between_surfaces_extracted_alike(subject
 
 
 def test_registration_follows_the_surfaces(subject, surfaces):
-    settings = TrackingSettings(method="registration")
+    settings = TrackingSettings(method="registration", refine_ed=False)
     out = track_surfaces(subject["ed"], subject["faces"], surfaces[:2], settings)
     for t in (1,):
         assert out.quality[t]["mean_distance"] < 0.25 * VOXEL
@@ -284,7 +286,7 @@ def test_track_cohort_records_failures_and_resumes(tmp_path, subject):
     broken = [lab.copy() for lab in labels]
     broken[2][broken[2] == 1] = 2
     write_series(images / "absent.nii.gz", broken, subject["affine"])
-    settings = TrackingSettings(meshing=MESHING)
+    settings = TrackingSettings(meshing=MESHING, refine_ed=False)
     planes = {"good": subject["planes"]}
     outcome = track_cohort(meshes, images, out, 1, settings, cut_planes=planes, jobs=1,
                            progress=False)  # fmt: skip
@@ -367,8 +369,8 @@ def slice_offsets(subject):
             v, f, _ = extract_surface(LabelImage(labels, affine, Path("synthetic")), 1, settings)
             surfaces.append((v, f))
         for key, base in (("plain", None), ("anchored", planes)):
-            tracked = track_surfaces(ed, subject["faces"], surfaces, TrackingSettings(),
-                                     base_planes=base)  # fmt: skip
+            tracked = track_surfaces(ed, subject["faces"], surfaces,
+                                     TrackingSettings(refine_ed=False), base_planes=base)  # fmt: skip
             out[key].append(_basal_bias(subject, tracked.vertices, subject["fractions"][es]))
     return {k: np.array(v) for k, v in out.items()}
 

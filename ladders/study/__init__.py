@@ -19,6 +19,8 @@ Sub-packages, by concern:
 - :mod:`.reporting`: the report (:func:`summarize`, :func:`write_report`,
   :func:`tidy_rows`, :func:`paired_statistics`), the figures and the comparison
   of deformation models;
+- :mod:`.wall`: wall thickness, thickening and strain per vertex and AHA segment, from
+  the tracked endocardium and epicardium;
 - :mod:`.cli`: the ``symladders`` command line.
 
 Beside them: local area strain (:func:`area_strain`, :func:`area_strain_error`),

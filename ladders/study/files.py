@@ -12,7 +12,9 @@ array's dtype, shape and bytes) and :func:`config_hash` (JSON-ready parameters).
 from __future__ import annotations
 
 import contextlib
+import csv
 import hashlib
+import io
 import json
 import os
 import tempfile
@@ -21,7 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["atomic_path", "atomic_write_text", "file_sha256", "array_digest", "config_hash"]
+__all__ = [
+    "atomic_path",
+    "atomic_write_text",
+    "csv_text",
+    "file_sha256",
+    "array_digest",
+    "config_hash",
+]
 
 
 def _umask() -> int:
@@ -66,6 +75,15 @@ def atomic_write_text(path: str | Path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_path`)."""
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def csv_text(header, rows) -> str:
+    """A CSV table's text: the ``header`` row, then ``rows`` (``\\n`` line ends)."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    return buf.getvalue()
 
 
 def file_sha256(path: str | Path) -> str:

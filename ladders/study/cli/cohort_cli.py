@@ -199,6 +199,33 @@ def add_cohort_parser(sub) -> None:
     p.set_defaults(run=run_cohort_command, output_is_file=False)
 
 
+def _check_image_options(args) -> None:
+    """``--images labels`` without ``--cycle``: the options that only shape meshes are refused."""
+    for flag, value in (("--remesh", args.remesh), ("--pose", args.pose),
+                        ("--landmarks", args.landmarks)):  # fmt: skip
+        if value:
+            raise UsageError(f"symladders cohort: error: {flag}: not with --images labels (the "
+                             "images are meshed by 'symladders run'; the landmarks come from the "
+                             "right ventricle's label)")  # fmt: skip
+
+
+def _write_images(data, args):
+    """The cohort as label images with subjects.csv and study.toml (``--images labels``)."""
+    from pathlib import Path
+
+    from ..population.image_cohort import write_image_cohort
+
+    voxel = args.voxel or (1.5, 1.5)
+    return write_image_cohort(data, Path(args.output), spacing=voxel[0], thickness=voxel[1])
+
+
+def _print_images(folder) -> None:
+    print(f"label images: {folder / 'images'} (1 blood pool, 3 right ventricle); subjects: "
+          f"{folder / 'subjects.csv'}; settings: {folder / 'study.toml'}; truth: "
+          f"{folder / 'planted_region.json'}")  # fmt: skip
+    print(f"next: symladders run {folder / 'study.toml'}")
+
+
 def run_cohort_command(args) -> int:
     """Write the two-group cohort (or the cohort in several groups) from parsed arguments."""
     from pathlib import Path
@@ -217,20 +244,36 @@ def run_cohort_command(args) -> int:
         raise UsageError(f"symladders cohort: error: {exc}") from None
     if args.cycle is not None:
         return run_cycle_cohort(args, abnormality)
+    if args.images == "cine" or args.tagging:
+        raise UsageError("symladders cohort: error: --images cine and --tagging: only with --cycle")
+    if args.images == "labels":
+        _check_image_options(args)
     if several_groups(args):
         data, groups = covariate_data(args, abnormality)
-        folder = write_covariate_cohort(
-            data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
-            pose=args.pose, landmarks=args.landmarks,
-        )  # fmt: skip
+        if args.images == "labels":
+            folder = _write_images(data, args)
+        else:
+            folder = write_covariate_cohort(
+                data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
+                pose=args.pose, landmarks=args.landmarks,
+            )  # fmt: skip
         print_covariate_cohort(data, groups, folder, f"{data.cohort.n_vertices} vertices")
-        print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
-              f"truth: {folder / 'planted_region.json'}")  # fmt: skip
+        if args.images == "labels":
+            _print_images(folder)
+        else:
+            print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
+                  f"truth: {folder / 'planted_region.json'}")  # fmt: skip
         return 0
     data = make_two_group_cohort(
         args.subjects, args.patients, abnormality, args.vertices, args.seed, args.noise,
         args.noise_length,
     )  # fmt: skip
+    if args.images == "labels":
+        folder = _write_images(data, args)
+        print(f"symladders cohort: {len(data.cohort)} subjects ({int(data.labels.sum())} "
+              f"patients) as label images, in {folder}")  # fmt: skip
+        _print_images(folder)
+        return 0
     folder = write_two_group_cohort(
         data,
         Path(args.output),

@@ -64,11 +64,14 @@ def add_cycle_arguments(p) -> None:
     )
     g.add_argument("--cycle", type=_frames, default=None, metavar="FRAMES",
                    help="frames per cycle (e.g. 25; ES at 35 %% of the cycle)")  # fmt: skip
-    g.add_argument("--images", choices=("labels", "cine", "none"), default="labels",
-                   help="with --cycle: label series (0, 1 blood pool, 2 myocardium) or cine "
-                        "intensities")  # fmt: skip
-    g.add_argument("--voxel", type=_voxel, default=(1.5, 8.0), metavar="IN_PLANE,THICKNESS",
-                   help="with --cycle: voxel size of the short-axis stacks, mm")  # fmt: skip
+    g.add_argument("--images", choices=("labels", "cine", "none"), default=None,
+                   help="label images (1 blood pool, 2 myocardium, 3 right ventricle), with "
+                        "subjects.csv and study.toml for 'symladders run'; with --cycle, label "
+                        "series (the default) or cine intensities (default: labels with --cycle, "
+                        "none without: meshes only)")  # fmt: skip
+    g.add_argument("--voxel", type=_voxel, default=None, metavar="IN_PLANE,THICKNESS",
+                   help="voxel size of the images, mm (default: 1.5,8, short-axis stacks, with "
+                        "--cycle; 1.5,1.5 without)")  # fmt: skip
     g.add_argument("--tagging", nargs="?", const="2d", choices=("2d", "3d"), default=None,
                    help="with --images cine: tagging lines 7 mm apart, moving with the wall: "
                         "planes along the long axis (2d, the default) or, with 3d, also "
@@ -95,6 +98,8 @@ def run_cycle_cohort(args, abnormality) -> int:
     if given:
         raise UsageError(f"symladders cohort: error: --{given[0].replace('_', '-')}: not with "
                          "--cycle")  # fmt: skip
+    args.images = args.images or "labels"
+    args.voxel = args.voxel or (1.5, 8.0)
     if args.tagging and args.images != "cine":
         raise UsageError("symladders cohort: error: --tagging: only with --images cine")
     if abnormality is not None:  # transitions wide enough for the motion to stay invertible

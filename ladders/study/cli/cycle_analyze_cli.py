@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sys
 
+from ..sequences.cycle_analysis import MEASURES, MOTION_MEASURES
 from .cli_types import (
     DefaultsFormatter,
     OneLineParser,
@@ -56,7 +57,9 @@ def add_cycle_analyze_parser(sub) -> None:
         description=(
             "Test the transported cycles of a cycle study (STUDY, the output of 'symladders "
             "cycle-study') on the normal motion (or, with --measure rotation, the rotation "
-            "about the long axis) at every vertex, by the linear model of 'symladders analyze "
+            "about the long axis), or a cohort's wall maps (STUDY, the output of 'symladders "
+            "wall', with --measure thickness, thickening, radial, circumferential or "
+            "longitudinal) at every vertex, by the linear model of 'symladders analyze "
             "--design': two groups (--groups) or a design table with covariates (--design, "
             "--model, --contrast: t per one-row contrast, F over several levels). Each "
             "contrast is tested per frame (FWER over the vertices and frames together), on "
@@ -70,7 +73,8 @@ def add_cycle_analyze_parser(sub) -> None:
         formatter_class=DefaultsFormatter,
     )
     p.add_argument("study", type=existing_folder, metavar="STUDY",
-                   help="folder written by 'symladders cycle-study'")  # fmt: skip
+                   help="folder written by 'symladders cycle-study' (or, with a wall measure, "
+                        "'symladders wall')")  # fmt: skip
     p.add_argument("--groups", type=existing_file, default=None,
                    help="CSV table with the columns subject and group: two groups compared "
                         "(the model 'group'; instead of --design)")  # fmt: skip
@@ -78,10 +82,12 @@ def add_cycle_analyze_parser(sub) -> None:
                            "--exclude-segments and the long axis of --measure rotation")  # fmt: skip
     add_permutations(p)
     add_seed(p)
-    p.add_argument("--measure", choices=("normal", "rotation"), default="normal",
+    p.add_argument("--measure", choices=tuple(MEASURES), default="normal",
                    help="the curve tested per vertex: the normal motion (mm), or the rotation "
                         "about the long axis (degrees, counter-clockwise seen from the apex; "
-                        "what a twist changes; needs --aha)")  # fmt: skip
+                        "what a twist changes; needs --aha), of a cycle study; or, of the maps "
+                        "of 'symladders wall', the wall thickness or thickening (mm) or the "
+                        "radial, circumferential or longitudinal strain (percent)")  # fmt: skip
     p.add_argument("--min-radius", type=positive_float, default=5.0,
                    help="with --measure rotation: vertices closer to the long axis than this "
                         "(mm) are not tested (their angle is ill-conditioned)")  # fmt: skip
@@ -143,6 +149,10 @@ def run_cycle_analyze_command(args) -> int:
     request = model_request(args, "cycle-analyze")
     landmarks = _landmarks(args)
     curves = {"measure": args.measure, "min_radius": args.min_radius, "fwhm": args.fwhm}
+    if args.measure not in MOTION_MEASURES:  # the wall's measures: the maps of 'symladders wall'
+        from ..wall import load_wall_cycles
+
+        curves["motion"] = load_wall_cycles(args.study)
     if args.outcome is not None:
         try:
             outcome = analyze_cycle_outcome(

@@ -4,7 +4,8 @@ Subcommands: ``study``, ``mesh`` (label images to meshes), ``correspond`` and ``
 a cohort in correspondence and its atlas), ``cohort`` (the synthetic cohort in two
 groups with a planted abnormality), ``analyze`` (group statistics of a study's
 transported motion), ``validate``, ``track`` (corresponded ED meshes through label or cine
-series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested).
+series), ``cycle-study`` and ``cycle-analyze`` (every frame transported and tested),
+``wall`` (wall thickness, thickening and strain of tracked subjects).
 """
 
 from __future__ import annotations
@@ -32,9 +33,11 @@ from .cycle_analyze_cli import add_cycle_analyze_parser
 from .cycle_cli import add_cycle_study_parser
 from .mesh_cli import add_mesh_parser
 from .plugin_arguments import preload_plugins
+from .run_cli import add_run_parser
 from .study_cli import add_study_parser
 from .track_cli import add_track_parser
 from .validate_cli import add_validate_parser
+from .wall_cli import add_wall_parser
 
 __all__ = ["main", "build_parser"]
 
@@ -46,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
+    add_run_parser(sub)
     add_study_parser(sub)
     add_mesh_parser(sub)
     add_correspond_parser(sub)
@@ -56,6 +60,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_track_parser(sub)
     add_cycle_study_parser(sub)
     add_cycle_analyze_parser(sub)
+    add_wall_parser(sub)
     return parser
 
 

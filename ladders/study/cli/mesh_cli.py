@@ -140,6 +140,11 @@ def add_mesh_parser(sub) -> None:
     p.add_argument("--rv-label", type=nonnegative_int, default=None, metavar="INT",
                    help="the right ventricle's label: find each mesh's apex, base-plane centre "
                         "and septal point and write landmarks.csv (default: no landmarks)")  # fmt: skip
+    p.add_argument("--myocardium-label", type=nonnegative_int, default=None, metavar="INT",
+                   help="the myocardium's label: also write each image's epicardium (the outer "
+                        "surface of --label and this label, the same settings and cut) as "
+                        "OUTPUT/epicardium/<mesh>, which 'symladders track --cine --epicardia' "
+                        "follows (default: no epicardium)")  # fmt: skip
     p.add_argument("--rv-septum", choices=("insertion", "centroid"), default="insertion",
                    help="with --rv-label, the septal direction: half way between the RV's "
                         "insertion points (its angular edges about the long axis, as the AHA "
@@ -178,6 +183,7 @@ def run_mesh_command(args) -> int:
                 args.images, args.label, args.output, frames, settings, jobs=args.jobs,
                 progress=not args.no_progress, ext=args.ext, cut_planes=planes,
                 rv_label=args.rv_label, rv_septum=args.rv_septum,
+                myocardium_label=args.myocardium_label,
             )  # fmt: skip
     except (ImageError, ValueError) as exc:
         raise UsageError(f"symladders mesh: error: {exc}") from None

@@ -7,6 +7,7 @@ standard error), 2 on a usage error.
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 
@@ -59,8 +60,11 @@ def add_track_parser(sub) -> None:
             "(<subject>.nii.gz with the frames on the fourth axis, or a folder <subject>/ of 3-D "
             "frames numbered frame_00, frame_01, ...; the first is ED). Every frame is meshed as "
             "'symladders mesh' does and the mesh is moved from frame to frame onto it (affine "
-            "fit and normal projection, or an LDDMM registration); with --refine-ed every frame "
-            "is also reached from ED directly and the two results are combined (less drift). "
+            "fit and normal projection, or an LDDMM registration); every frame is also reached "
+            "from ED directly and the two results are combined (less drift; --no-refine-ed: "
+            "the chain alone). On thick slices a subject given no valve plane (--cut-planes) "
+            "has the plane of every frame estimated from its images (--estimate-planes), "
+            "written to OUTPUT/valve_planes.csv. "
             "The ED mesh is first moved along its normals onto ED's surface meshed like the "
             "other frames, so that the motion is measured between surfaces extracted alike. "
             "A cut plane for every frame of a subject (--cut-planes, e.g. the cohort's "
@@ -80,6 +84,16 @@ def add_track_parser(sub) -> None:
                    help="folder of label series (4-D NIfTI or folders of frames)")  # fmt: skip
     p.add_argument("--label", type=nonnegative_int, default=None,
                    help="the structure's label (required for label series)")  # fmt: skip
+    p.add_argument("--myocardium-label", type=nonnegative_int, default=None, metavar="INT",
+                   help="label series: the myocardium's label; every frame's epicardium (the "
+                        "outer surface of --label and this label) is meshed and frame 0's "
+                        "followed through them, written to <subject>/epicardium/ for "
+                        "'symladders wall' (default: no epicardium)")  # fmt: skip
+    p.add_argument("--epicardia", type=existing_folder, default=None, metavar="FOLDER",
+                   help="with --cine: a folder of ED epicardia <subject>_ed.<ext> in the images' "
+                        "world frame ('symladders mesh --myocardium-label' writes them in "
+                        "OUTPUT/epicardium), each moved with its subject's endocardium "
+                        "(default: no epicardium)")  # fmt: skip
     p.add_argument("--cine", action="store_true",
                    help="IMAGES are cine intensity series: track by image registration")  # fmt: skip
     p.add_argument("--control-point-spacing", type=positive_float, default=20.0, metavar="MM",
@@ -107,8 +121,9 @@ def add_track_parser(sub) -> None:
     add_output(p, "symladders-output/tracked", "folder of the tracked meshes")
     p.add_argument("--method", choices=("projection", "registration"), default="projection",
                    help="frame to frame: affine fit then normal projection, or LDDMM registration")  # fmt: skip
-    p.add_argument("--refine-ed", action="store_true",
-                   help="also move ED onto every frame directly and combine (limits the drift)")  # fmt: skip
+    p.add_argument("--refine-ed", action=argparse.BooleanOptionalAction, default=True,
+                   help="also move ED onto every frame directly and combine (limits the drift; "
+                        "--no-refine-ed: the chain alone, about half the time)")  # fmt: skip
     p.add_argument("--keep-ed", action="store_true",
                    help="frame 0 is the ED mesh as given, not moved along its normals onto ED's "
                         "surface meshed like the other frames (the difference between the two "
@@ -124,6 +139,12 @@ def add_track_parser(sub) -> None:
                         "axis); more than 'symladders mesh' uses: on thick slices it lowers the "
                         "noise of the tracked motion")  # fmt: skip
     add_cut_planes(p)
+    p.add_argument("--estimate-planes", choices=("auto", "always", "never"), default="always",
+                   help="a subject without a plane in --cut-planes gets the valve plane of every "
+                        "frame estimated from its images and its ED mesh's rim: always, auto on "
+                        "thick slices only (the largest voxel spacing at least twice the "
+                        "smallest), or never; written to OUTPUT/valve_planes.csv, which --cut-planes takes "
+                        "back")  # fmt: skip
     add_batch_arguments(p)
     p.set_defaults(run=run_track_command, output_is_file=False)
 
@@ -135,6 +156,12 @@ def run_track_command(args) -> int:
 
     if args.label is None and not args.cine:
         raise UsageError("symladders track: error: --label: required for label series (or --cine)")
+    if args.myocardium_label is not None and (args.cine or args.myocardium_label == args.label):
+        raise UsageError("symladders track: error: --myocardium-label: for label series, a label "
+                         "other than --label (with --cine, give --epicardia)")  # fmt: skip
+    if args.epicardia is not None and not args.cine:
+        raise UsageError("symladders track: error: --epicardia: with --cine only (label series "
+                         "take --myocardium-label)")  # fmt: skip
     planes = args.cut_planes and read_cut_planes(
         args.cut_planes, "track", _series_names(args.images)
     )
@@ -157,13 +184,15 @@ def run_track_command(args) -> int:
             meshing = MeshingSettings(n_vertices=args.vertices or None, mask_sigma=args.mask_sigma)
             settings = TrackingSettings(
                 method=args.method, refine_ed=args.refine_ed, crop_distance=args.crop_distance,
-                project_ed=not args.keep_ed, meshing=meshing,
+                project_ed=not args.keep_ed, meshing=meshing, estimate_planes=args.estimate_planes,
             )  # fmt: skip
         label = 0 if args.label is None else args.label
         with parallel_backend(args, "track"):
             outcome = track_cohort(args.meshes, args.images, args.output, label, settings,
                                    cut_planes=planes, jobs=args.jobs,
-                                   progress=not args.no_progress)  # fmt: skip
+                                   progress=not args.no_progress,
+                                   myocardium_label=args.myocardium_label,
+                                   epicardia=args.epicardia)  # fmt: skip
     except (SeriesError, ValueError) as exc:
         raise UsageError(f"symladders track: error: {exc}") from None
     counts = {
@@ -174,6 +203,9 @@ def run_track_command(args) -> int:
         f"{counts['skipped']} already done, {counts['failed']} failed, in {outcome.output} "
         "(tracking.csv)"
     )
+    if outcome.planes_file is not None:
+        print(f"valve planes estimated from the images: {outcome.planes_file} (the --cut-planes "
+              "table: inspect or edit it and pass it back)")  # fmt: skip
     for r in outcome.failed:
         print(f"symladders track: failed: {r['subject']}: {r['error']}", file=sys.stderr)
     return 1 if outcome.failed else 0

@@ -10,6 +10,9 @@
 - :mod:`.planted_effect`: a regional motion abnormality and its ground truth on the atlas;
 - :mod:`.segmentation_noise`: smooth random normal displacements of a surface;
 - :mod:`.groups_table`: the ``subject,group`` table;
+- :mod:`.analytic_ventricle`: :class:`AnalyticVentricle`, a cavity of known motion in
+  closed form (label images, a mesh, the valve plane of every frame), independent of
+  the synthetic model: a ground truth for the tracking;
 - :mod:`.cardiac_cycle`: the whole cycle, a time course and a motion of the volume
   (:func:`cycle_frames`, :func:`motion_forward`, :func:`motion_inverse`); a two-group
   cohort's cycles are in :mod:`ladders.study.population.cycle_cohort`.
@@ -17,6 +20,7 @@
 
 from ..errors import CohortError, MeshFolderError, MissingAtlasError
 from .aha_segments import AHA_SEGMENTS, segment_of, segment_weights
+from .analytic_ventricle import AnalyticVentricle
 from .benchmark_shapes import bent_ellipsoid
 from .cardiac_cycle import (
     check_invertible,
@@ -54,6 +58,7 @@ from .synthetic_lv import (
 )
 
 __all__ = [
+    "AnalyticVentricle",
     "Cohort",
     "CohortError",
     "MeshFolderError",

@@ -8,6 +8,8 @@ Folder layout (details in ``docs/cohort.md``)::
         subject001_es.vtk         end-systole S' of subject "subject001"
         subject002/ed.ply         or one subfolder per subject
         subject002/es.ply
+        epicardium/               not a subject: the epicardia ``symladders mesh
+                                  --myocardium-label`` writes beside the meshes
 
 Every mesh must have the atlas's vertex count and faces, in the same vertex
 order (:func:`assemble_cohort` checks it); single files are read and written by
@@ -33,6 +35,7 @@ from ..meshes.mesh_io import (
 from .cohort import Cohort, Subject
 
 __all__ = [
+    "EPICARDIUM_FOLDER",
     "UnusedMeshFilesWarning",
     "read_cohort",
     "assemble_cohort",
@@ -41,6 +44,11 @@ __all__ = [
     "scan_mesh_folder",
     "natural_key",
 ]
+
+
+#: The sub-folder of a mesh folder (``symladders mesh --myocardium-label``) or of a tracked
+#: subject's folder (``symladders track``) that holds the epicardia; not a subject's.
+EPICARDIUM_FOLDER = "epicardium"
 
 
 class UnusedMeshFilesWarning(UserWarning):
@@ -77,6 +85,8 @@ def scan_mesh_folder(folder: Path) -> tuple[Path | None, dict[str, dict[str, Pat
         if path.name.startswith("."):
             continue
         if path.is_dir():
+            if path.name == EPICARDIUM_FOLDER:
+                continue
             for inner in sorted(path.iterdir()):
                 if not usable(inner):
                     continue

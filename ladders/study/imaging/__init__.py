@@ -5,6 +5,8 @@
 - :mod:`.surface_extraction`: one label to a surface (largest component, marching
   cubes in the image's world frame, Taubin smoothing, a cut plane, decimation) with a
   report (:func:`extract_surface`, :class:`MeshingSettings`);
+- :mod:`.epicardium`: the outer surface of the myocardium, cavity included
+  (:func:`extract_epicardium`), the surface wall thickness is measured to;
 - :mod:`.mesh_images`: a batch of images to a folder the study reads, resumable,
   with provenance (:func:`mesh_label_images`);
 - :mod:`.septum`: the landmarks of a meshed left ventricle, its septum placed by
@@ -28,6 +30,7 @@ from .cine import (
     tag_pattern,
     write_series,
 )
+from .epicardium import EPICARDIUM_FOLDER, epicardial_image, extract_epicardium
 from .label_images import (
     IMAGE_SUFFIXES,
     ImageError,
@@ -37,7 +40,13 @@ from .label_images import (
     read_label_series,
 )
 from .mesh_images import REPORT_FILE, MeshingOutcome, MeshingTask, mesh_label_images, plan_meshing
-from .plane_table import check_plane_table, planes_by_image, read_plane_table
+from .plane_table import (
+    PLANES_FILE,
+    check_plane_table,
+    planes_by_image,
+    read_plane_table,
+    write_plane_table,
+)
 from .rv_label import add_rv_label, voxel_centres
 from .septum import label_centroid, label_points, landmarks_from_labels, lv_apex_and_base
 from .series_frames import FRAME_CHOICES, least_volume_frame, read_frames_table
@@ -46,7 +55,9 @@ from .surface_extraction import (
     SurfaceReport,
     cut_at_plane,
     extract_surface,
+    largest_component,
     remove_lid,
+    voxel_extent,
 )
 from .voxelize import close_surface, short_axis_affine, voxelize, write_label_image
 
@@ -63,6 +74,8 @@ __all__ = [
     "mesh_label_images",
     "plan_meshing",
     "read_plane_table",
+    "write_plane_table",
+    "PLANES_FILE",
     "check_plane_table",
     "planes_by_image",
     "FRAME_CHOICES",
@@ -73,6 +86,11 @@ __all__ = [
     "cut_at_plane",
     "remove_lid",
     "extract_surface",
+    "EPICARDIUM_FOLDER",
+    "epicardial_image",
+    "extract_epicardium",
+    "largest_component",
+    "voxel_extent",
     "close_surface",
     "short_axis_affine",
     "voxelize",

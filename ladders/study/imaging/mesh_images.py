@@ -13,8 +13,12 @@
 Each mesh is written atomically with a provenance record beside it
 (``<mesh>.json``: the source's SHA-256, label, frame, voxel spacing, affine, the
 settings and the extraction report); a rerun skips the meshes whose record matches
-(same source bytes, label, frame and settings). A file that fails (label absent,
-not a label image, a frame out of range, no or a singular affine,
+(same source bytes, label, frame and settings). With ``myocardium_label``, every image's
+epicardium (the outer surface of the cavity and the myocardium,
+:func:`~.epicardium.extract_epicardium`, with the same settings and cut plane) is written
+too, as ``epicardium/<mesh>`` (its meshing report in the mesh's record): ``symladders
+track --cine --epicardia`` moves the ED one through the cycle. A file that fails (label
+or myocardium absent, not a label image, a frame out of range, no or a singular affine,
 the two frames of a subject on different grids) is recorded with its reason in
 ``meshing.csv`` and the others go on.
 
@@ -47,6 +51,7 @@ from ..batch import run_batch
 from ..files import atomic_path, atomic_write_text, file_sha256
 from ..meshes.mesh_io import WRITE_EXTENSIONS, write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
+from .epicardium import EPICARDIUM_FOLDER, extract_epicardium
 from .label_images import IMAGE_SUFFIXES, ImageError, image_stem, read_label_image
 from .meshing_landmarks import PHASES, ed_landmarks, folder_landmarks, landmarks_of, subject_phase
 from .plane_table import image_names, plane_for
@@ -176,6 +181,7 @@ def _matching_record(
     settings,
     rv_label: int | None,
     rv_septum: str = "insertion",
+    myocardium_label: int | None = None,
 ) -> dict | None:
     """The provenance record of a mesh made from the same inputs (None: none such)."""
     try:
@@ -193,6 +199,8 @@ def _matching_record(
     if rv_label is not None:  # the landmarks of this RV label are part of the result
         same = (same and record.get("rv_label") == rv_label and landmarks_of(record) is not None
                 and record.get("rv_septum", "centroid") == rv_septum)  # fmt: skip
+    if myocardium_label is not None:  # and the epicardium of this myocardium label
+        same = same and (record.get("epicardium") or {}).get("myocardium_label") == myocardium_label
     return record if same else None
 
 
@@ -217,18 +225,22 @@ def _meshed(
     settings: MeshingSettings,
     rv_label: int | None = None,
     rv_septum: str = "insertion",
+    myocardium_label: int | None = None,
 ) -> dict | None:
     """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of an image meshed before
-    from the same file, frame, label, settings (and RV label) (None: it is meshed)."""
+    from the same file, frame, label, settings (and RV and myocardium labels) (None: it is
+    meshed)."""
     out = folder / task.output
     if task.error or not out.is_file():
+        return None
+    if myocardium_label is not None and not (folder / EPICARDIUM_FOLDER / task.output).is_file():
         return None
     try:
         sha = file_sha256(task.source)
     except OSError:
         return None  # the worker records why
     record = _matching_record(out.with_suffix(".json"), sha, task, label, settings, rv_label,
-                              rv_septum)  # fmt: skip
+                              rv_septum, myocardium_label)  # fmt: skip
     if record is None:
         return None
     landmarks = None if rv_label is None else landmarks_of(record)
@@ -242,6 +254,7 @@ def _mesh_one(
     settings: MeshingSettings,
     rv_label: int | None = None,
     rv_septum: str = "insertion",
+    myocardium_label: int | None = None,
 ) -> dict:
     out = folder / task.output
     record_path = out.with_suffix(".json")
@@ -259,6 +272,10 @@ def _mesh_one(
             landmarks = landmarks_from_labels(vertices, faces, image, rv_label,
                                               cut_plane=settings.cut_plane,
                                               septum=rv_septum)  # fmt: skip
+        epicardium = None
+        if myocardium_label is not None:  # before writing: an image without one gives no mesh
+            ev, ef, epicardium = extract_epicardium(image, label, myocardium_label, settings)
+            write_mesh(folder / EPICARDIUM_FOLDER / task.output, ev, ef, atomic=True)
         write_mesh(out, vertices, faces, atomic=True)
         record = {
             "source": str(task.source.resolve()), "sha256": sha, "label": label,
@@ -273,6 +290,10 @@ def _mesh_one(
             record["rv_septum"] = rv_septum
             record["landmarks"] = {"apex": landmarks.apex.tolist(), "base": landmarks.base.tolist(),
                                    "septum": landmarks.septum.tolist()}  # fmt: skip
+        if epicardium is not None:
+            record["epicardium"] = {"myocardium_label": myocardium_label,
+                                    "mesh": f"{EPICARDIUM_FOLDER}/{task.output}",
+                                    "report": epicardium.as_dict()}  # fmt: skip
         atomic_write_text(record_path, json.dumps(record, indent=1))
         return {**row, "report": report.describe(),
                 "landmarks": None if landmarks is None else landmarks.as_array().tolist()}  # fmt: skip
@@ -302,6 +323,7 @@ def mesh_label_images(
     cut_planes: dict | None = None,
     rv_label: int | None = None,
     rv_septum: str = "insertion",
+    myocardium_label: int | None = None,
 ) -> MeshingOutcome:
     """Mesh the label ``label`` of every image into ``output`` (see the module).
 
@@ -339,6 +361,9 @@ def mesh_label_images(
         How the septal direction is taken from the RV label: the bisector of its
         insertion points or the direction of its centroid
         (:func:`~.septum.landmarks_from_labels`'s ``septum``).
+    myocardium_label : int, optional
+        The myocardium's label in the same images: each mesh's epicardium is written
+        too, as ``epicardium/<mesh>`` (see the module). None: no epicardium.
 
     Returns
     -------
@@ -354,6 +379,12 @@ def mesh_label_images(
         rv_label = int(rv_label)
         if rv_label == int(label):
             raise ValueError(f"rv_label: must differ from the LV's label ({label})")
+    if myocardium_label is not None:
+        if isinstance(myocardium_label, bool) or myocardium_label in (int(label), rv_label) or (
+                not isinstance(myocardium_label, int | np.integer)):  # fmt: skip
+            raise ValueError(f"myocardium_label: expected an int other than the cavity's and the "
+                             f"RV's labels, got {myocardium_label!r}")  # fmt: skip
+        myocardium_label = int(myocardium_label)
     if rv_septum not in SEPTUM_METHODS:
         raise ValueError(f"rv_septum: expected one of {SEPTUM_METHODS}, got {rv_septum!r}")
     images = [Path(p) for p in images]
@@ -362,8 +393,8 @@ def mesh_label_images(
         raise ImageError(f"{bad[0]}: not a NIfTI label image (.nii or .nii.gz)")
     folder = Path(output)
     folder.mkdir(parents=True, exist_ok=True)
-    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label, rv_septum)
-             for t in plan_meshing(images, frames, ext, int(label))]  # fmt: skip
+    tasks = [(t, int(label), folder, _settings_for(t, settings, cut_planes), rv_label, rv_septum,
+              myocardium_label) for t in plan_meshing(images, frames, ext, int(label))]  # fmt: skip
     records = []
     landmarks_file = None if rv_label is None else folder / LANDMARKS_FILE
     try:

@@ -7,7 +7,8 @@ and ``nx,ny,nz`` its normal, in world mm (e.g. the valve plane, the part beyond 
 removed). A row without a frame holds for every frame of its image; a row with one,
 for that frame only (e.g. the valve plane moving with the base, as
 ``symladders cohort --cycle`` writes ``valve_planes.csv``). ``symladders mesh`` and
-``symladders track`` read it with :func:`read_plane_table`; a second row for one image
+``symladders track`` read it with :func:`read_plane_table` (and :func:`write_plane_table`
+writes it, as ``symladders cohort --cycle`` and ``symladders track`` do); a second row for one image
 and frame, a non-numeric value, a column the table does not have and, with
 :func:`check_plane_table`, an image that is not given or a frame beyond its series are
 refused in one line naming the file, the line and the column.
@@ -15,19 +16,29 @@ refused in one line naming the file, the line and the column.
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Mapping
 from pathlib import Path
 
 from ladders.tables import Column, Table, read_table
 
+from ..files import atomic_write_text
+
 __all__ = [
     "PLANE_COLUMNS",
+    "PLANES_FILE",
     "read_plane_table",
+    "write_plane_table",
     "check_plane_table",
     "planes_by_image",
     "plane_for",
     "image_names",
 ]
+
+#: The per-frame valve planes of a series, as a cut-plane table: the synthetic cohort's
+#: truth (``symladders cohort --cycle``), the planes ``symladders track`` estimates.
+PLANES_FILE = "valve_planes.csv"
 
 #: The columns of a cut-plane table (``frame`` optional: empty or absent for every frame).
 PLANE_COLUMNS = (
@@ -46,6 +57,22 @@ def read_plane_table(path) -> Table:
         One line naming the file, the line and the column.
     """
     return read_table(path, PLANE_COLUMNS, what="cut-plane table", key=("image", "frame"))
+
+
+def write_plane_table(path, planes: Mapping) -> Path:
+    """Write ``{image: {frame: (x, y, z, nx, ny, nz)}}`` as a cut-plane table.
+
+    One row per image and frame, columns ``image,frame,x,y,z,nx,ny,nz`` (world mm), what
+    :func:`read_plane_table` reads; written atomically. Returns the path.
+    """
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["image", "frame", "x", "y", "z", "nx", "ny", "nz"])
+    for image, frames in planes.items():
+        for frame, plane in frames.items():
+            writer.writerow([image, frame, *(f"{float(x):.6f}" for x in plane)])
+    atomic_write_text(Path(path), buffer.getvalue())
+    return Path(path)
 
 
 def check_plane_table(table: Table, frames: Mapping[str, int | None]) -> None:

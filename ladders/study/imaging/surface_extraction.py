@@ -27,7 +27,15 @@ from skimage.measure import marching_cubes
 from ..volume import enclosed_volume
 from .label_images import ImageError, LabelImage
 
-__all__ = ["MeshingSettings", "SurfaceReport", "extract_surface", "cut_at_plane", "remove_lid"]
+__all__ = [
+    "MeshingSettings",
+    "SurfaceReport",
+    "extract_surface",
+    "cut_at_plane",
+    "remove_lid",
+    "largest_component",
+    "voxel_extent",
+]
 
 
 @dataclass(frozen=True)
@@ -247,6 +255,16 @@ def _boundary_loops(faces: np.ndarray) -> int:
     return len({find(a) for a in boundary.ravel().tolist()})
 
 
+def largest_component(mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """The largest connected component of a boolean mask (26-connectivity) and the number of
+    components; an empty mask is returned as it is (0 components)."""
+    components, n_components = ndimage.label(mask, structure=np.ones((3, 3, 3)))
+    if n_components <= 1:
+        return np.asarray(mask, dtype=bool), int(n_components)
+    sizes = np.bincount(components.ravel())[1:]
+    return components == int(np.argmax(sizes)) + 1, int(n_components)
+
+
 def extract_surface(
     image: LabelImage, label: int, settings: MeshingSettings | None = None
 ) -> tuple[np.ndarray, np.ndarray, SurfaceReport]:
@@ -274,14 +292,12 @@ def extract_surface(
             f"{image.path}{'' if image.frame is None else f' frame {image.frame}'}: label {label} "
             f"is absent (empty mask); labels present: {present or 'none'}"
         )
-    components, n_components = ndimage.label(mask, structure=np.ones((3, 3, 3)))
+    largest, n_components = largest_component(mask)
     dropped_components, dropped_voxels = 0, 0
     if n_components > 1 and settings.keep_largest:
-        sizes = np.bincount(components.ravel())[1:]
-        largest = int(np.argmax(sizes)) + 1
         dropped_components = n_components - 1
-        dropped_voxels = int(voxels - sizes[largest - 1])
-        mask = components == largest
+        dropped_voxels = int(voxels - largest.sum())
+        mask = largest
     field = np.pad(mask.astype(float), 2)
     if settings.mask_sigma > 0:
         field = ndimage.gaussian_filter(field, settings.mask_sigma, mode="constant")
@@ -313,7 +329,7 @@ def extract_surface(
         plane = _shifted_plane(settings, image.affine)
         world, faces = cut_at_plane(world, faces, plane)
         if settings.lid_angle is not None and len(faces):
-            depth = settings.lid_depth * _extent(plane[3:], image.affine)
+            depth = settings.lid_depth * voxel_extent(plane[3:], image.affine)
             world, faces = remove_lid(world, faces, plane, depth, settings.lid_angle)
     boundary, non_manifold = _edge_counts(faces)
     report = SurfaceReport(
@@ -330,11 +346,11 @@ def _shifted_plane(settings: MeshingSettings, affine: np.ndarray) -> tuple:
     point = np.asarray(settings.cut_plane[:3], float)
     normal = np.asarray(settings.cut_plane[3:], float)
     normal = normal / np.linalg.norm(normal)
-    point = point - settings.cut_margin * _extent(normal, affine) * normal
+    point = point - settings.cut_margin * voxel_extent(normal, affine) * normal
     return (*point, *normal)
 
 
-def _extent(normal, affine: np.ndarray) -> float:
+def voxel_extent(normal, affine: np.ndarray) -> float:
     """A voxel's width along the unit vector ``normal`` (mm)."""
     normal = np.asarray(normal, float) / np.linalg.norm(normal)
     return float(np.abs(normal @ np.asarray(affine, float)[:3, :3]).sum())

@@ -34,7 +34,6 @@ meshes and the meshes made from the ED images.
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
@@ -42,10 +41,12 @@ import numpy as np
 
 from ..errors import CohortError
 from ..imaging.cine import TagGrid, write_series
+from ..imaging.plane_table import PLANES_FILE, write_plane_table
 from ..imaging.voxelize import short_axis_affine
 from ..meshes.mesh_io import write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from ..preparation.synthetic_landmarks import synthetic_landmarks
+from ..tracking.base_planes import rim_plane
 from ..volume import boundary_vertices
 from .covariate_cohort import CovariateCohort, write_covariate_cohort
 from .two_groups import write_two_group_cohort
@@ -60,7 +61,7 @@ __all__ = [
 ]
 
 #: The per-frame valve planes :func:`write_cycle_cohort` writes (``--cut-planes`` format).
-VALVE_PLANES_FILE = "valve_planes.csv"
+VALVE_PLANES_FILE = PLANES_FILE
 
 #: What :func:`write_cycle_cohort` renders into ``images/``.
 IMAGE_KINDS = ("labels", "cine", "none")
@@ -80,9 +81,9 @@ def valve_planes(frames, faces) -> np.ndarray:
     Returns
     -------
     ndarray, shape (n_frames, 6)
-        ``(x, y, z, nx, ny, nz)`` per frame: the rim's centroid and the unit normal of
-        its least-squares plane, pointing away from the surface's centroid (the side
-        ``MeshingSettings.cut_plane`` removes).
+        ``(x, y, z, nx, ny, nz)`` per frame (:func:`~ladders.study.tracking.base_planes.rim_plane`):
+        the rim's centroid and the unit normal of its least-squares plane, pointing away
+        from the surface's centroid (the side ``MeshingSettings.cut_plane`` removes).
     """
     frames = np.asarray(frames, dtype=float)
     rim = boundary_vertices(faces)
@@ -91,14 +92,7 @@ def valve_planes(frames, faces) -> np.ndarray:
             f"frames: expected (n_frames, k, 3) of an open surface, got {frames.shape} with "
             f"{len(rim)} rim vertices"
         )
-    out = np.empty((len(frames), 6))
-    for t, v in enumerate(frames):
-        centre = v[rim].mean(axis=0)
-        normal = np.linalg.svd(v[rim] - centre)[2][-1]
-        if np.dot(centre - v.mean(axis=0), normal) < 0:
-            normal = -normal
-        out[t] = np.r_[centre, normal]
-    return out
+    return np.array([rim_plane(v, faces) for v in frames])
 
 
 def cycle_valve_planes(cycles) -> dict:
@@ -112,14 +106,6 @@ def cycle_valve_planes(cycles) -> dict:
     return {name: {str(t): [float(x) for x in plane]
                    for t, plane in enumerate(valve_planes(cycles.frames[i], cycles.faces))}
             for i, name in enumerate(cycles.names)}  # fmt: skip
-
-
-def _write_planes(path: Path, cycles) -> None:
-    rows = [["image", "frame", "x", "y", "z", "nx", "ny", "nz"]]
-    for name, frames in cycle_valve_planes(cycles).items():
-        rows += [[name, t, *(f"{x:.6f}" for x in plane)] for t, plane in frames.items()]
-    with open(path, "w", newline="", encoding="utf-8") as fh:
-        csv.writer(fh, lineterminator="\n").writerows(rows)
 
 
 def cycle_grid(ed, in_plane: float = 1.5, thickness: float = 8.0) -> tuple[np.ndarray, tuple]:
@@ -198,7 +184,7 @@ def write_cycle_cohort(
         table.update((name, synthetic_landmarks(cycles.frames[i, 0]))
                      for i, name in enumerate(cycles.names))  # fmt: skip
         write_landmarks(folder / LANDMARKS_FILE, table)
-    _write_planes(folder / VALVE_PLANES_FILE, cycles)
+    write_plane_table(folder / VALVE_PLANES_FILE, cycle_valve_planes(cycles))
     if images != "none":
         cycles.check_invertible()  # a folded motion cannot be rendered: say which subject
     if rng is None:

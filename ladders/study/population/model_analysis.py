@@ -35,6 +35,7 @@ from .analysis import select_motions
 from .group_comparison import normalize_motion
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model
 from .model_design import model_design
+from .model_figures import plot_model_map
 from .transported_motion import load_transported_motion
 
 __all__ = ["ModelOutcome", "analyze_model", "main_comparison"]
@@ -322,8 +323,11 @@ def analyze_model(
         paths[name] = folder / name
     write_model_maps(comparisons, folder / "maps", alpha)
     paths["maps"] = folder / "maps"
-    if figures and segments is not None:
+    if figures:
         for c in main:
-            name = f"fig_bullseye_{_slug(c.contrast)}.png"
-            paths[name] = _bullseyes(c, folder / name, alpha)
+            name = f"fig_model_map_{_slug(c.contrast)}.png"
+            paths[name] = plot_model_map(c, folder / name, alpha)
+            if segments is not None:
+                name = f"fig_bullseye_{_slug(c.contrast)}.png"
+                paths[name] = _bullseyes(c, folder / name, alpha)
     return ModelOutcome(comparisons, main, paths, left_out)

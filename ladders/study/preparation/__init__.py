@@ -29,6 +29,7 @@ from .alignment import (
     principal_frame,
     procrustes,
     random_rigid_transform,
+    second_moments,
 )
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
 from .atlas_run import AtlasInterrupted, AtlasRun, build_atlas
@@ -76,6 +77,7 @@ __all__ = [
     "procrustes",
     "icp_align",
     "principal_frame",
+    "second_moments",
     "random_rigid_transform",
     "AtlasResult",
     "estimate_atlas",

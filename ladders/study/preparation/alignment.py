@@ -36,6 +36,7 @@ __all__ = [
     "procrustes",
     "icp_align",
     "principal_frame",
+    "second_moments",
     "icp_starts",
     "random_rigid_transform",
 ]
@@ -159,10 +160,13 @@ def procrustes(source, target, *, scale: bool = False, weights=None) -> Similari
     return SimilarityTransform(rotation, my - s * rotation @ mx, s)
 
 
-def principal_frame(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Area-weighted centroid ``(3,)`` and principal axes ``(3, 3)`` (columns, decreasing variance).
+def second_moments(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Area-weighted centroid ``(3,)`` and second-moment tensor ``(3, 3)`` of a surface.
 
-    The axes form a rotation (determinant +1); their signs are arbitrary.
+    Each triangle counts its centre with its area: ``m = sum_t w_t c_t`` and
+    ``M = sum_t w_t (c_t - m)(c_t - m)^T`` (``w`` the areas over their sum), so both
+    depend on the surface, not on its triangulation; ``trace(M)`` is the squared RMS
+    distance of the surface to its centroid.
     """
     a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
@@ -170,7 +174,17 @@ def principal_frame(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray
     w = area / area.sum()
     centroid = w @ centres
     d = centres - centroid
-    _, vecs = np.linalg.eigh((d * w[:, None]).T @ d)
+    return centroid, (d * w[:, None]).T @ d
+
+
+def principal_frame(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Area-weighted centroid ``(3,)`` and principal axes ``(3, 3)`` (columns, decreasing variance).
+
+    The eigenvectors of :func:`second_moments`; they form a rotation (determinant +1),
+    their signs are arbitrary.
+    """
+    centroid, moments = second_moments(vertices, faces)
+    _, vecs = np.linalg.eigh(moments)
     axes = vecs[:, ::-1].copy()
     if np.linalg.det(axes) < 0:
         axes[:, 2] *= -1

@@ -17,6 +17,12 @@ depend on the labels and the permutations stay exact), ``s = sign(m_t*)`` at the
 of largest ``|m_t|``, and the peak is ``s max_t (s r_t)`` (signed degrees) with its
 time. Vertices closer to the axis than ``min_radius`` (the apical cap) are not tested.
 
+With a wall measure (``thickness``, ``thickening``, ``radial``, ``circumferential``,
+``longitudinal``) the curves are a cohort's wall maps
+(:class:`~ladders.study.wall.WallCycles`, from ``symladders wall``) instead of its
+transported motion, and their peaks are taken in the sense the cohort moves, as the
+rotation's.
+
 With ``fwhm`` every subject's curve map at every frame is first smoothed on the
 atlas by the heat kernel of that full width at half maximum (mm,
 :class:`~ladders.statistics.SurfaceSmoother`), as vertex-wise surface analyses
@@ -42,10 +48,16 @@ from ..meshes.mesh_io import read_mesh
 from ..wall_motion import outward_vertex_normals
 from ..wall_rotation import rotation_about_axis
 
-__all__ = ["MEASURES", "CycleMotion", "axis_points", "load_cycle_motion"]
+__all__ = ["MEASURES", "MOTION_MEASURES", "CycleMotion", "axis_points", "load_cycle_motion"]
 
-#: What a cycle test measures at each vertex and frame, and its unit.
-MEASURES = {"normal": "mm", "rotation": "deg"}
+#: What a cycle test measures at each vertex and frame, and its unit: the motion's, from a
+#: cycle study (:class:`CycleMotion`), and the wall's, from the wall maps of ``symladders
+#: wall`` (:class:`~ladders.study.wall.WallCycles`: thickness and thickening in mm, the
+#: radial, circumferential and longitudinal strain in percent).
+MEASURES = {"normal": "mm", "rotation": "deg", "thickness": "mm", "thickening": "mm",
+            "radial": "percent", "circumferential": "percent", "longitudinal": "percent"}  # fmt: skip
+#: The measures of a cycle study's transported motion (the others are the wall maps').
+MOTION_MEASURES = ("normal", "rotation")
 
 
 @dataclass(frozen=True)
@@ -108,8 +120,10 @@ class CycleMotion:
         subject's map at every frame is smoothed on the atlas by the heat kernel of that
         full width at half maximum (:class:`~ladders.statistics.SurfaceSmoother`; the
         rotation over its vertices off the axis)."""
-        if measure not in MEASURES:
-            raise ValueError(f"measure: expected one of {sorted(MEASURES)}, got {measure!r}")
+        if measure not in MOTION_MEASURES:
+            raise ValueError(f"measure: expected one of {list(MOTION_MEASURES)} of a cycle study, "
+                             f"got {measure!r}" + (" (a wall measure: test the maps of "
+                             "'symladders wall')" if measure in MEASURES else ""))  # fmt: skip
         if measure == "normal":
             curves = self.normal()
         else:

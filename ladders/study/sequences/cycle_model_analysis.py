@@ -55,7 +55,9 @@ class CycleLabel:
             alpha2 = float(alpha2[0] if isinstance(alpha2, list) else alpha2)
         except (OSError, ValueError, TypeError, IndexError, AttributeError):
             settings, alpha2 = {}, None
-        curve = "normal motion" if measure == "normal" else "rotation about the long axis"
+        curve = {"normal": "normal motion", "rotation": "rotation about the long axis"}.get(
+            measure, measure
+        )
         return cls(f"cycle_{measure}", f"whole cycle, {curve}",
                    str(settings.get("deformation", "")), alpha2=alpha2)  # fmt: skip
 
@@ -113,6 +115,7 @@ def analyze_cycle_model(
     progress: bool = True,
     figures: bool = True,
     source=None,
+    motion=None,
 ) -> CycleModelOutcome:
     """Test the contrasts of a linear model on a cycle study; write the analysis.
 
@@ -156,13 +159,17 @@ def analyze_cycle_model(
     progress, figures : bool
     source : path, optional
         The design table's file, named in the errors.
+    motion : CycleMotion or WallCycles, optional
+        The curves already read (e.g. a cohort's wall maps,
+        :func:`~ladders.study.wall.load_wall_cycles`, for a wall measure); default the
+        cycle study's (:func:`~.cycle_analysis.load_cycle_motion`).
 
     Returns
     -------
     CycleModelOutcome
     """
     n_permutations = check_int(n_permutations, "n_permutations", minimum=1)
-    motion = load_cycle_motion(study)
+    motion = load_cycle_motion(study) if motion is None else motion
     model = model_design(table, formula, contrasts, motion.subjects, blocks, source, _STUDY)
     motion = motion.subset(model.kept)
     labels = None
@@ -219,6 +226,7 @@ def analyze_cycle_outcome(
     n_bootstrap: int = 1000,
     seed: int = 0,
     source=None,
+    motion=None,
 ) -> OutcomeOutcome:
     """Predict a survival outcome from the cycle's curves (every frame, every vertex).
 
@@ -240,12 +248,14 @@ def analyze_cycle_outcome(
     measure, landmarks, min_radius, fwhm : the curves (see :func:`analyze_cycle_model`).
     n_components, n_splits, n_bootstrap, seed : the Cox model's cross-validation.
     source : path, optional
+    motion : CycleMotion or WallCycles, optional
+        The curves already read (see :func:`analyze_cycle_model`).
 
     Returns
     -------
     OutcomeOutcome
     """
-    motion = load_cycle_motion(study)
+    motion = load_cycle_motion(study) if motion is None else motion
     kept, left_out = check_design_table(table, list(motion.subjects), source, _STUDY)
     motion = motion.subset(kept)
     if measure == "rotation" and landmarks is None:

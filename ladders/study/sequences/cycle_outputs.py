@@ -5,7 +5,7 @@ Written by :func:`write_cycle_tests` into one folder, for every contrast tested:
 * ``cycle_vertices.csv``: one row per contrast and vertex: for the peak (``peak_``) and
   the time to peak (``time_``) the contrast's estimate (``effect``, a one-row contrast;
   for two groups also each group's mean, ``peak_group1_mm`` or, with the rotation,
-  ``peak_group1_deg``), the statistic (``t`` or ``F``) and its FWER p; for the frames
+  ``peak_group1_deg``, or a wall measure's, in mm or percent), the statistic (``t`` or ``F``) and its FWER p; for the frames
   the largest ``|t|`` or ``F`` and the smallest FWER p over the frames; for the
   trajectory Pillai's trace and its FWER p; with TFCE, each summary's enhanced map
   (``peak_tfce``, ...) and its FWER p (``peak_tfce_p_fwer``, ...); when only some vertices
@@ -26,14 +26,12 @@ Written by :func:`write_cycle_tests` into one folder, for every contrast tested:
 
 from __future__ import annotations
 
-import csv
-import io
 import re
 from pathlib import Path
 
 import numpy as np
 
-from ..files import atomic_write_text
+from ..files import atomic_write_text, csv_text
 from ..meshes.mesh_outputs import write_point_mesh
 from ..population.aha_model import AHA_NAMES
 from .cycle_analysis import CycleMotion
@@ -45,6 +43,16 @@ __all__ = ["write_cycle_tests", "vertex_columns"]
 _KINDS = {"t": "t", "F": "F", "pillai": "Pillai's V"}
 _PREFIX = {"per_frame": "frames", "peak": "peak", "time_to_peak": "time",
            "trajectory": "trajectory"}  # fmt: skip
+#: The figures' axis label of every measure.
+_AXIS_LABELS = {
+    "normal": "normal motion (mm, inward < 0)",
+    "rotation": "rotation (deg, counter-clockwise from the apex > 0)",
+    "thickness": "wall thickness (mm)",
+    "thickening": "wall thickening from ED (mm)",
+    "radial": "radial strain (%)",
+    "circumferential": "circumferential strain (%)",
+    "longitudinal": "longitudinal strain (%)",
+}
 _NAMES = {"per_frame": "per frame", "peak": "peak", "time_to_peak": "time to peak",
           "trajectory": "trajectory"}  # fmt: skip
 
@@ -85,14 +93,6 @@ def vertex_columns(tests: CycleTests) -> dict[str, np.ndarray]:
     return columns
 
 
-def _csv(header, rows) -> str:
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
-    return buf.getvalue()
-
-
 def _vertices_csv(all_tests: list, k: int) -> str:
     """Every contrast's columns; a column one contrast lacks (an F test's effect) is empty."""
     per_contrast = [vertex_columns(tests) for tests in all_tests]
@@ -101,7 +101,7 @@ def _vertices_csv(all_tests: list, k: int) -> str:
     for tests, columns in zip(all_tests, per_contrast):
         cells = [[f"{columns[c][v]:.6g}" if c in columns else "" for c in names] for v in range(k)]
         rows += [[tests.contrast, v, *cells[v]] for v in range(k)]
-    return _csv(["contrast", "vertex", *names], rows)
+    return csv_text(["contrast", "vertex", *names], rows)
 
 
 def _frames_csv(all_tests: list, fractions, alpha: float) -> str:
@@ -118,7 +118,7 @@ def _frames_csv(all_tests: list, fractions, alpha: float) -> str:
             )
             rows.append([tests.contrast, t, f"{fractions[t]:.4f}", int((pf.p_fwer[t] < alpha).sum()),
                          enhanced, f"{np.nanmax(np.abs(pf.statistic[t])):.4g}"])  # fmt: skip
-    return _csv(header, rows)
+    return csv_text(header, rows)
 
 
 def _segments_csv(all_tests: list) -> str:
@@ -135,14 +135,14 @@ def _segments_csv(all_tests: list) -> str:
                     stat, p_fwer, frame = r.statistic[s], r.p_fwer[s], ""
                 rows.append([tests.contrast, summary, r.kind, s + 1, AHA_NAMES[s + 1],
                              f"{stat:.6g}", f"{p_fwer:.6g}", frame])  # fmt: skip
-    return _csv(header, rows)
+    return csv_text(header, rows)
 
 
 def _summary(all_tests: list, header: str, alpha: float) -> str:
     tfce = all_tests[0].tfce
     first = all_tests[0]
     lines = ["# Linear-model analysis of the whole cycle", "", header, "",
-             f"Curve per vertex: {'normal motion (mm)' if first.measure == 'normal' else 'rotation about the long axis (degrees)'}"
+             f"Curve per vertex: {_AXIS_LABELS.get(first.measure, first.measure)}"
              f"; {int(first.tested.sum())} of {first.tested.size} atlas vertices tested; the "
              f"trajectory on {first.components} principal component(s) per vertex "
              f"({100 * first.explained:.0f} % of the curves' variance). Family-wise error "
@@ -232,8 +232,8 @@ def write_cycle_tests(
         atomic_write_text(folder / name, text)
         paths.append(folder / name)
     curves = all_tests[0].curves(motion)
-    ylabel = ("normal motion (mm, inward < 0)" if all_tests[0].measure == "normal"
-              else "rotation (deg, counter-clockwise from the apex > 0)")  # fmt: skip
+    first = all_tests[0]
+    ylabel = _AXIS_LABELS.get(first.measure, f"{first.measure} ({first.unit})")
     for tests in all_tests:
         suffix = "" if len(all_tests) == 1 else f"_{_slug(tests.contrast)}"
         columns = vertex_columns(tests)

@@ -14,6 +14,23 @@ planes anchoring the base's height where every frame has its own) and writes::
     <output>/<subject>.json             provenance: inputs' SHA-256, frames, settings,
                                          per-frame quality and meshing, versions
     <output>/tracking.csv               one row per subject: status, frames, reason
+    <output>/valve_planes.csv           the valve planes estimated from the images (the
+                                         ``--cut-planes`` table, world mm), when any was
+
+A subject given no valve plane has every frame's plane estimated from its images and
+its ED mesh's rim (:func:`~.base_planes.estimate_base_planes`) when
+``settings.estimate_planes`` says so (by default on thick slices,
+:func:`~.base_planes.thick_sliced`); the planes are then used as given ones, kept in the
+subject's record (``estimated_planes``) and gathered in ``valve_planes.csv``, which
+``cut_planes`` (``symladders track --cut-planes``) takes back, e.g. after an edit.
+
+With ``myocardium_label`` (label series), every frame's epicardium is meshed too and
+frame 0's is followed through them; with ``epicardia`` (cine series), a folder of ED
+epicardial meshes ``<subject>_ed.<ext>`` in the images' world frame (``symladders mesh
+--myocardium-label``'s ``epicardium/``), each subject's is moved with its endocardium
+(:mod:`.epicardium_tracking`). Either way the epicardium of every frame is written as
+``<output>/<subject>/epicardium/frame_<kk>.vtk`` (its own triangulation), in the frame of
+the endocardium's, for the wall thickness (``symladders wall``).
 
 The corresponded meshes are in the atlas's frame: where the folder holds the
 subject's record ``correspondence/<subject>.json`` (as ``symladders correspond``
@@ -41,32 +58,22 @@ from pathlib import Path
 import numpy as np
 
 from ..batch import run_batch
-from ..cohort.mesh_folder import natural_key
 from ..files import atomic_write_text, file_sha256
 from ..imaging.surface_extraction import MeshingSettings, extract_surface
-from ..meshes.mesh_io import MESH_EXTENSIONS, read_mesh, write_mesh
+from ..meshes.mesh_io import read_mesh, write_mesh
 from ..preparation.alignment import SimilarityTransform
+from .base_planes import estimate_base_planes, gather_plane_table, planes_wanted
 from .cine_tracking import CineTrackingSettings, track_cine
-from .label_series import SeriesError, check_field_of_view, find_series, open_series
+from .epicardium_tracking import EPICARDIUM_FOLDER, track_cine_with_epicardium, track_epicardium
+from .label_series import SeriesError, check_field_of_view, open_series
 from .settings import TrackingSettings
 from .surface_tracking import TrackedSurfaces, track_surfaces
+from .tracking_plan import TrackingTask, plan_tracking
 
 __all__ = ["TrackingTask", "TrackingOutcome", "plan_tracking", "track_cohort", "REPORT_FILE"]
 
 #: The batch's table of subjects, written into the output folder.
 REPORT_FILE = "tracking.csv"
-_RECORDS = "correspondence"
-
-
-@dataclass(frozen=True)
-class TrackingTask:
-    """One subject to track: its ED mesh, its correspondence transform, its series."""
-
-    subject: str
-    ed: Path | None
-    transform: dict | None
-    series: Path | None
-    error: str = ""
 
 
 @dataclass
@@ -79,69 +86,18 @@ class TrackingOutcome:
     records : list of dict
         ``subject``, ``status`` (ok, skipped, failed), ``frames``, ``mean_distance``
         (largest over the frames, mm), ``error``.
+    planes_file : Path or None
+        ``valve_planes.csv``, the planes estimated from the images, when any was.
     """
 
     output: Path
     records: list = field(default_factory=list)
+    planes_file: Path | None = None
 
     @property
     def failed(self) -> list:
         """The rows of the subjects that could not be tracked."""
         return [r for r in self.records if r["status"] == "failed"]
-
-
-def _ed_meshes(folder: Path) -> dict[str, Path]:
-    if not folder.is_dir():
-        raise SeriesError(f"meshes: {folder} is not a folder")
-    out: dict[str, Path] = {}
-    for path in sorted(folder.iterdir()):
-        if (
-            path.name.startswith(".")
-            or not path.is_file()
-            or path.suffix.lower() not in MESH_EXTENSIONS
-        ):
-            continue
-        if path.stem.lower().endswith("_ed"):
-            subject = path.stem[:-3]
-            if subject in out:
-                raise SeriesError(
-                    f"meshes: subject {subject!r} has two ED meshes, {out[subject]} and {path}"
-                )
-            out[subject] = path
-    if not out:
-        raise SeriesError(f"meshes: {folder} holds no '<subject>_ed.<ext>' mesh")
-    return out
-
-
-def _transform(folder: Path, subject: str) -> dict | None:
-    path = folder / _RECORDS / f"{subject}.json"
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    transform = record.get("transform") if isinstance(record, dict) else None
-    return transform if isinstance(transform, dict) and "matrix" in transform else None
-
-
-def plan_tracking(meshes_folder, images) -> list[TrackingTask]:
-    """The subjects to track (every ED mesh and every series), with the errors known beforehand."""
-    folder = Path(meshes_folder)
-    meshes = _ed_meshes(folder)
-    series = find_series(images)
-    tasks = []
-    for subject in sorted(set(meshes) | set(series), key=natural_key):
-        ed, source = meshes.get(subject), series.get(subject)
-        error = ""
-        if ed is None:
-            error = f"subject {subject!r}: no ED mesh '{subject}_ed.<ext>' in {folder}"
-        elif source is None:
-            error = (f"subject {subject!r}: no label series ({subject}.nii.gz, or a folder "
-                     f"{subject}/ of frames) among the images")  # fmt: skip
-        elif isinstance(source, str):
-            error, source = source, None
-        tasks.append(TrackingTask(subject, ed, _transform(folder, subject) if ed else None,
-                                  source, error))  # fmt: skip
-    return tasks
 
 
 def _planes_of(task: TrackingTask, cut_planes: dict | None) -> dict | None:
@@ -187,7 +143,8 @@ def _base_planes(planes, n_frames: int) -> np.ndarray | None:
     return np.array([planes[str(t)] for t in range(n_frames)], dtype=float)
 
 
-def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, planes) -> dict:
+def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, planes,
+                 myocardium: int | None = None) -> dict:  # fmt: skip
     out = {
         "ed_sha256": file_sha256(task.ed),
         "series_sha256": _series_hashes(task.series),
@@ -198,7 +155,16 @@ def _fingerprint(task: TrackingTask, label: int, settings: TrackingSettings, pla
     }
     if _anchored(settings, planes):  # results of before the anchors are not reused
         out["base_anchors"] = True
+    if myocardium is not None:  # keys only when set: the records without them stay valid
+        out["myocardium_label"] = int(myocardium)
+    if task.epicardium is not None:
+        out["epicardium_sha256"] = file_sha256(task.epicardium)
     return out
+
+
+def _epicardium_wanted(task: TrackingTask, settings, myocardium: int | None) -> bool:
+    cine = isinstance(settings, CineTrackingSettings)
+    return task.epicardium is not None if cine else myocardium is not None
 
 
 def _frame_name(t: int, n: int, ext: str) -> str:
@@ -210,13 +176,14 @@ def _row(task: TrackingTask, status: str, **extra) -> dict:
             "mean_distance": extra.get("mean_distance", ""), "error": extra.get("error", "")}  # fmt: skip
 
 
-def _done(task: TrackingTask, output: Path, label: int, settings, planes, ext: str) -> dict | None:
+def _done(task: TrackingTask, output: Path, label: int, settings, planes, ext: str,
+          myocardium: int | None = None) -> dict | None:  # fmt: skip
     """``reuse`` of :func:`~ladders.study.batch.run_batch`: the row of a subject tracked before."""
     if task.error:
         return None
     try:
         record = json.loads((output / f"{task.subject}.json").read_text(encoding="utf-8"))
-        fingerprint = _fingerprint(task, label, settings, planes)
+        fingerprint = _fingerprint(task, label, settings, planes, myocardium)
     except (OSError, ValueError):
         return None
     if not isinstance(record, dict) or record.get("status") != "ok":
@@ -224,27 +191,28 @@ def _done(task: TrackingTask, output: Path, label: int, settings, planes, ext: s
     if record.get("fingerprint") != fingerprint:
         return None
     n = int(record.get("n_frames", 0))
-    if n < 1 or not all(
-        (output / task.subject / _frame_name(t, n, ext)).is_file() for t in range(n)
-    ):
+    folders = [output / task.subject]
+    if _epicardium_wanted(task, settings, myocardium):
+        folders.append(output / task.subject / EPICARDIUM_FOLDER)
+    if n < 1 or not all((f / _frame_name(t, n, ext)).is_file() for f in folders for t in range(n)):
         return None
     return _row(task, "skipped", frames=n, mean_distance=record.get("max_mean_distance", ""))
 
 
 def _clear(output: Path, subject: str, ext: str) -> None:
-    folder = output / subject
-    if folder.is_dir():
-        for path in folder.glob(f"frame_*{ext}"):
-            path.unlink(missing_ok=True)
+    for folder in (output / subject, output / subject / EPICARDIUM_FOLDER):
+        if folder.is_dir():
+            for path in folder.glob(f"frame_*{ext}"):
+                path.unlink(missing_ok=True)
 
 
 def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingSettings,
-               planes, ext: str) -> dict:  # fmt: skip
+               planes, ext: str, myocardium: int | None = None) -> dict:  # fmt: skip
     record: dict = {"subject": task.subject, "status": "failed"}
     try:
         if task.error:
             raise SeriesError(task.error)
-        record["fingerprint"] = _fingerprint(task, label, settings, planes)
+        record["fingerprint"] = _fingerprint(task, label, settings, planes, myocardium)
         cine = isinstance(settings, CineTrackingSettings)
         series = open_series(task.series, labels=not cine)
         vertices, faces = read_mesh(task.ed)
@@ -253,22 +221,39 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
         )
         scanner = vertices if transform is None else transform.inverse().apply(vertices)
         check_field_of_view(scanner, series, f"{task.ed}")
-        reports = []
+        reports, epicardium = [], None
         if cine:  # B-spline registrations of the intensities, forward and backward
-            tracked = TrackedSurfaces(
-                track_cine(series.intensities(), series.affine, scanner, settings), faces
-            )
+            if task.epicardium is None:
+                moved = track_cine(series.intensities(), series.affine, scanner, settings)
+            else:
+                epi_ed, epi_faces = read_mesh(task.epicardium)
+                check_field_of_view(epi_ed, series, f"{task.epicardium}")
+                moved, epi = track_cine_with_epicardium(series.intensities(), series.affine,
+                                                        scanner, epi_ed, settings)  # fmt: skip
+                epicardium = TrackedSurfaces(epi, epi_faces)
+            tracked = TrackedSurfaces(moved, faces)
         else:
+            frames = series.frames()
+            if planes_wanted(settings, series.affine, faces, planes):
+                estimate = estimate_base_planes(scanner, faces, frames, label)
+                record["estimated_planes"] = estimate.as_dict()
+                planes = {str(t): [float(x) for x in p] for t, p in enumerate(estimate.planes)}
+            elif not planes and getattr(settings, "estimate_planes", "never") != "never":
+                record["estimated_planes"] = {"skipped": "the ED mesh is closed (its label was "
+                                              "meshed without a valve plane): the estimate "
+                                              "starts from an open mesh's rim"}  # fmt: skip
             surfaces = []
-            for t, image in enumerate(series.frames()):
-                v, f, report = extract_surface(
-                    image, label, _frame_settings(settings.meshing, planes, t)
-                )
+            meshing = [_frame_settings(settings.meshing, planes, t) for t in range(len(frames))]
+            for image, frame_meshing in zip(frames, meshing):
+                v, f, report = extract_surface(image, label, frame_meshing)
                 surfaces.append((v, f))
                 reports.append(report.as_dict())
             base = _base_planes(planes, series.n_frames) if _anchored(settings, planes) else None
             record["base_anchors"] = base is not None
             tracked = track_surfaces(scanner, faces, surfaces, settings, base_planes=base)
+            if myocardium is not None:
+                epicardium, epi_reports = track_epicardium(frames, label, myocardium, settings,
+                                                           meshing, base)  # fmt: skip
         _clear(output, task.subject, ext)
         for t in range(series.n_frames):
             frame = (
@@ -276,12 +261,27 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
             )
             write_mesh(output / task.subject / _frame_name(t, series.n_frames, ext), frame, faces,
                        atomic=True)  # fmt: skip
+        if epicardium is not None:
+            for t in range(series.n_frames):
+                v = epicardium.vertices[t]
+                write_mesh(output / task.subject / EPICARDIUM_FOLDER
+                           / _frame_name(t, series.n_frames, ext),
+                           v if transform is None else transform.apply(v), epicardium.faces,
+                           atomic=True)  # fmt: skip
+            record["epicardium"] = {
+                "myocardium_label": None if cine else int(myocardium),
+                "ed_mesh": None if task.epicardium is None else str(task.epicardium.resolve()),
+                "n_vertices": int(epicardium.vertices.shape[1]),
+                "quality": epicardium.quality, "surfaces": [] if cine else epi_reports,
+            }  # fmt: skip
         worst = max((q["mean_distance"] for q in tracked.quality), default=float("nan"))
         record.update(
             status="ok", ed_mesh=str(task.ed.resolve()), series=[str(p.resolve()) for p in series.files],
             n_frames=series.n_frames, label=int(label), frame="atlas" if transform else "images",
             affine=series.affine.tolist(), spacing_mm=np.linalg.norm(series.affine[:3, :3], axis=0).tolist(),
-            settings=settings.as_dict(), cut_planes=planes, quality=tracked.quality,
+            scale=1.0 if transform is None else float(transform.scale),
+            settings=settings.as_dict(), cut_planes=record["fingerprint"]["cut_planes"],
+            quality=tracked.quality,
             surfaces=reports, max_mean_distance=worst, versions=_versions(),
         )  # fmt: skip
         row = _row(task, "ok", frames=series.n_frames, mean_distance=worst)
@@ -323,6 +323,8 @@ def track_cohort(
     jobs: int = 2,
     progress: bool = True,
     ext: str = ".vtk",
+    myocardium_label: int | None = None,
+    epicardia=None,
 ) -> TrackingOutcome:
     """Track every subject's corresponded ED mesh through its label series (see the module).
 
@@ -349,13 +351,21 @@ def track_cohort(
         ``"all"`` for the others). Where every frame of a subject has its own plane
         (the valve plane moving with the base) and the method is the projection, the
         planes also anchor the affine fits (:func:`~.surface_tracking.track_surfaces`'s
-        ``base_planes``; the record's ``base_anchors``).
+        ``base_planes``; the record's ``base_anchors``). A subject given none has its
+        planes estimated from its images when ``settings.estimate_planes`` says so (see
+        the module).
     jobs : int, default 2
         Subjects tracked in parallel (joblib processes).
     progress : bool
         A progress bar over the subjects (tqdm).
     ext : str, default ".vtk"
         Format of the tracked meshes.
+    myocardium_label : int, optional
+        Label series: the myocardium's label; every frame's epicardium is meshed and
+        followed too (see the module).
+    epicardia : path, optional
+        Cine series: a folder of ED epicardia ``<subject>_ed.<ext>`` in the images' world
+        frame, each moved with its subject's endocardium (see the module).
 
     Returns
     -------
@@ -365,10 +375,22 @@ def track_cohort(
     if isinstance(label, bool) or not isinstance(label, int | np.integer):
         raise ValueError(f"label: expected an int, got {label!r}")
     ext = "." + ext.lower().lstrip(".")
+    cine = isinstance(settings, CineTrackingSettings)
+    if myocardium_label is not None:
+        if cine:
+            raise ValueError("myocardium_label: for label series; cine series take epicardia")
+        if isinstance(myocardium_label, bool) or not isinstance(myocardium_label, int | np.integer):
+            raise ValueError(f"myocardium_label: expected an int, got {myocardium_label!r}")
+        if int(myocardium_label) == int(label):
+            raise ValueError(f"myocardium_label: must differ from the cavity's label ({label})")
+        myocardium_label = int(myocardium_label)
+    if epicardia is not None and not cine:
+        raise ValueError("epicardia: for cine series; label series take myocardium_label")
     output = Path(output)
-    tasks = plan_tracking(meshes_folder, images)
+    tasks = plan_tracking(meshes_folder, images, epicardia)
     output.mkdir(parents=True, exist_ok=True)
-    jobs_args = [(t, output, int(label), settings, _planes_of(t, cut_planes), ext) for t in tasks]
+    jobs_args = [(t, output, int(label), settings, _planes_of(t, cut_planes), ext,
+                  myocardium_label) for t in tasks]  # fmt: skip
     rows = []
     try:
         for row in run_batch(_track_one, jobs_args, jobs=jobs, progress=bool(progress),
@@ -378,4 +400,5 @@ def track_cohort(
         order = {t.subject: i for i, t in enumerate(tasks)}
         rows.sort(key=lambda r: order[r["subject"]])
         atomic_write_text(output / REPORT_FILE, _report_csv(rows))
-    return TrackingOutcome(output, rows)
+        planes_file = gather_plane_table(output, [t.subject for t in tasks])
+    return TrackingOutcome(output, rows, planes_file)

@@ -14,10 +14,13 @@ from manifolds.validation import check_float, check_int
 from ..imaging.surface_extraction import MeshingSettings
 from ..preparation.correspondence_settings import CorrespondenceSettings
 
-__all__ = ["TrackingSettings", "METHODS"]
+__all__ = ["TrackingSettings", "METHODS", "PLANE_ESTIMATES"]
 
 #: How a frame's mesh is moved onto the frame's surface.
 METHODS = ("projection", "registration")
+#: When :func:`~.cohort_tracking.track_cohort` estimates the valve planes of a subject
+#: given none: on thick slices (``"auto"``), for every series, or never.
+PLANE_ESTIMATES = ("auto", "always", "never")
 
 
 def _default_correspondence() -> CorrespondenceSettings:
@@ -40,9 +43,13 @@ class TrackingSettings:
         surface (LDDMM with a varifold term, as
         :func:`~ladders.study.preparation.correspondence.correspond_mesh` does, with
         the transform fixed to the identity: the frames share the scanner frame).
-    refine_ed : bool
+    refine_ed : bool, default True
         Also move the ED mesh onto every frame directly and combine the two results
-        (:func:`~.surface_tracking.combine_weight`): limits the drift of the chain.
+        (:func:`~.surface_tracking.combine_weight`): limits the drift of the chain. The
+        default since it was measured to lower the error along the long axis at ES on
+        8 mm and 1.5 mm label series, with valve planes given, estimated or absent, at
+        roughly one and a half times the time (generated ``base_planes`` in
+        ``docs/tracking.md``).
     project_ed : bool
         First move the ED mesh along its normals onto frame 0's surface, extracted like
         every other frame's, so that the motion is measured between surfaces extracted
@@ -71,6 +78,15 @@ class TrackingSettings:
     correspondence : CorrespondenceSettings
         The registration of ``method="registration"`` (its ``alignment`` is ``"none"``,
         its ``final_procrustes`` False).
+    estimate_planes : {"auto", "always", "never"}
+        Whether :func:`~.cohort_tracking.track_cohort` estimates the valve plane of every
+        frame from the images (:func:`~.base_planes.estimate_base_planes`) for a subject
+        given no plane: ``"always"`` (the default: the estimate lowers the error along
+        the long axis on isotropic series as on thick slices, docs/tracking.md),
+        ``"auto"`` on thick slices only (:func:`~.base_planes.thick_sliced`: the largest
+        voxel spacing at least twice the smallest), ``"never"``.
+        The planes then cut the frames' surfaces and anchor the affine fits as given
+        planes do.
     meshing : MeshingSettings
         How :func:`~.cohort_tracking.track_cohort` meshes each frame of a label series
         (:func:`~ladders.study.imaging.surface_extraction.extract_surface`). Default:
@@ -81,7 +97,7 @@ class TrackingSettings:
     """
 
     method: str = "projection"
-    refine_ed: bool = False
+    refine_ed: bool = True
     project_ed: bool = True
     crop_distance: float | None = 8.0
     affine_iterations: int = 15
@@ -89,12 +105,16 @@ class TrackingSettings:
     normal_max_distance: float | None = None
     max_detour: float | None = 2.0
     correspondence: CorrespondenceSettings = field(default_factory=_default_correspondence)
+    estimate_planes: str = "always"
     meshing: MeshingSettings = field(default_factory=lambda: MeshingSettings(mask_sigma=1.5))
 
     def __post_init__(self):
         name = "TrackingSettings"
         if self.method not in METHODS:
             raise ValueError(f"{name}: method: expected one of {METHODS}, got {self.method!r}")
+        if self.estimate_planes not in PLANE_ESTIMATES:
+            raise ValueError(f"{name}: estimate_planes: expected one of {PLANE_ESTIMATES}, got "
+                             f"{self.estimate_planes!r}")  # fmt: skip
         for key in ("refine_ed", "project_ed"):
             if not isinstance(getattr(self, key), bool | np.bool_):
                 raise ValueError(
