@@ -13,7 +13,9 @@ the mean. It stops when ``|G(x)|`` falls below ``tol``, measured with the
 space's norm at ``x`` when it has one (``space.norm``) and with the array norm
 of the tangent otherwise. Nothing here is specific to a space: on the LDDMM
 landmark space ``Log`` is a registration and the mean is the atlas of the
-shapes (:mod:`ladders.study.preparation.atlas`).
+shapes (:mod:`ladders.study.preparation.atlas`). The logarithms of one iteration
+are independent of each other: a caller may compute them its own way (``map_logs``,
+e.g. in parallel processes), the iteration being the same.
 """
 
 from __future__ import annotations
@@ -98,12 +100,20 @@ def _check_inputs(space, points, weights):
     return pts, w / w.sum()
 
 
-def _mean_log(space: Connection, x, pts, w):
-    """``(sum_i w_i Log_x(p_i), [Log_x(p_i)])``, batched when the space supports it."""
-    if space.supports_batch and isinstance(pts, np.ndarray):
+def _mean_log(space: Connection, x, pts, w, map_logs=None):
+    """``(sum_i w_i Log_x(p_i), [Log_x(p_i)])``: by ``map_logs`` when given, else batched
+    when the space supports it, else one after the other."""
+    if map_logs is not None:
+        logs = list(map_logs(x, pts))
+        if len(logs) != len(w):
+            raise ManifoldError(
+                f"frechet_mean: map_logs: returned {len(logs)} logarithms for {len(w)} points"
+            )
+    elif space.supports_batch and isinstance(pts, np.ndarray):
         logs = space.log(np.broadcast_to(x, pts.shape), pts)
         return np.tensordot(w, logs, axes=1), list(logs)
-    logs = [space.log(x, p) for p in pts]
+    else:
+        logs = [space.log(x, p) for p in pts]
     total = w[0] * logs[0]
     for wi, log in zip(w[1:], logs[1:]):
         total = total + wi * log
@@ -120,6 +130,7 @@ def frechet_mean(
     tol: float = 1e-10,
     max_iter: int = 100,
     callback: Callable | None = None,
+    map_logs: Callable | None = None,
 ) -> FrechetMeanResult:
     """Weighted Fréchet (Karcher) mean of ``points`` by the iteration ``x <- Exp_x(step G(x))``.
 
@@ -144,6 +155,11 @@ def frechet_mean(
         ``callback(iteration, x, gradient_norm)`` after every evaluation of ``G``;
         a true return value stops the iteration as converged (a criterion of the
         caller's, e.g. on the shape's displacement).
+    map_logs : callable, optional
+        ``map_logs(x, points)``: the sequence ``[Log_x(p_i)]``, one per point in their
+        order, computed as the caller chooses (e.g. the registrations of an LDDMM
+        atlas in parallel processes); by default ``space.log`` over the points, in
+        one batch when the space supports it, else one after the other.
 
     Returns
     -------
@@ -158,7 +174,7 @@ def frechet_mean(
     x = pts[0].copy() if initial is None else space.check_point(initial, "initial")
     norms, variances = [], []
     for it in range(max_iter + 1):
-        g, logs = _mean_log(space, x, pts, w)
+        g, logs = _mean_log(space, x, pts, w, map_logs)
         norms.append(_norm(space, x, g))
         variances.append(float(sum(wi * _norm(space, x, v) ** 2 for wi, v in zip(w, logs))))
         if callback is not None and callback(it, x, norms[-1]):

@@ -197,3 +197,29 @@ def test_an_unreadable_ed_mesh_is_left_out_with_status_1(atlas_folder, tmp_path)
     assert err.startswith("symladders atlas: warning: broken left out: MeshFolderError")
     record = json.loads((tmp_path / "T.json").read_text())
     assert list(record["skipped"]) == ["broken"] and "broken" not in record["subjects"]
+
+
+def test_atlas_of_a_subset_and_a_rerun_that_reuses_it(atlas_folder, tmp_path):
+    argv = ["atlas", "--meshes", atlas_folder, "-o", tmp_path / "T.vtk", "--subset", "1",
+            "--subset-rule", "random", "--subset-seed", "3", "--max-iter", "1", "-j", "1"]  # fmt: skip
+    status, out, err = run_cli(*argv)
+    assert status == 0, err
+    assert (
+        out.splitlines()[0].startswith("symladders atlas: 2 ED mesh(es) from")
+        and "(random subset of 1), landmarks term, start the subset's first subject" in out
+    )
+    record = json.loads((tmp_path / "T.json").read_text())
+    assert record["subset"]["rule"] == "random" and record["subset"]["seed"] == 3
+    assert len(record["subjects"]) == 1 and record["start"] == record["subjects"][0]
+    status, again, _ = run_cli(*argv)
+    assert status == 0 and again.splitlines()[-1] == (
+        f"symladders atlas: reused {tmp_path / 'T.vtk'}: finished before with the same inputs "
+        f"and settings (key {record['key']}, 1 iteration(s)); --no-resume estimates it again"
+    )
+    status, fresh, _ = run_cli(*argv, "--no-resume", "--no-progress")
+    assert status == 0 and "converged after 1" in fresh.splitlines()[-1]
+    status, _, err = run_cli(*argv[:5], "--subset", "0")
+    assert status == 2 and "--subset" in err
+    status, _, _ = run_cli(*argv[:5], "--subset", "all", "--max-iter", "1", "-j", "1")
+    record = json.loads((tmp_path / "T.json").read_text())
+    assert status == 0 and record["subset"] is None and len(record["subjects"]) == 2

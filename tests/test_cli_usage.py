@@ -49,8 +49,8 @@ def test_a_mistyped_subcommand_is_answered_with_the_closest(typed, meant, capsys
     assert main(["xyz"]) == 2
     err = capsys.readouterr().err
     assert (
-        "unknown command 'xyz', choose from study, mesh, correspond, atlas, cohort, analyze, "
-        "validate" in err
+        "unknown command 'xyz', choose from run, study, mesh, correspond, atlas, cohort, "
+        "analyze, validate" in err
     )
 
 

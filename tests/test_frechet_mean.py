@@ -161,3 +161,26 @@ def test_agrees_with_geomstats_frechet_mean(key):
     res = frechet_mean(ours, pts, w, tol=1e-13)
     assert res.converged
     np.testing.assert_allclose(res.mean, estimator.estimate_, atol=1e-8 * np.abs(res.mean).max())
+
+
+def test_map_logs_computes_the_logs_the_callers_way():
+    """A caller's ``map_logs`` (here, the points' logs in reverse order, put back) gives the
+    same iteration; it is called once per evaluation with the iterate; a wrong count is
+    refused."""
+    space = Hypersphere(2)
+    pts = ring(0.4, 5, lambda a: (np.sin(a), np.cos(a)))
+    pts[0] = pts[0] + 0.1
+    pts /= np.linalg.norm(pts, axis=1, keepdims=True)
+    seen = []
+
+    def reverse(x, points):
+        seen.append(np.array(x))
+        return [space.log(x, p) for p in points[::-1]][::-1]
+
+    ref = frechet_mean(space, pts, tol=1e-12)
+    res = frechet_mean(space, pts, tol=1e-12, map_logs=reverse)
+    np.testing.assert_allclose(res.mean, ref.mean, atol=1e-14)
+    assert res.n_iter == ref.n_iter and len(seen) == res.n_iter + 1
+    np.testing.assert_array_equal(seen[0], pts[0])
+    with pytest.raises(ManifoldError, match="map_logs: returned 4 logarithms for 5 points"):
+        frechet_mean(space, pts, map_logs=lambda x, p: reverse(x, p)[:4])

@@ -132,6 +132,8 @@ def test_the_series_is_tracked_and_its_cycle_transported(route):
     frames = sorted((results / "tracked" / subject).glob("frame_*.vtk"))
     assert len(frames) == 4
     assert (results / "cycle_study" / f"{subject}.npz").is_file()
+    record = json.loads((results / "tracked" / f"{subject}.json").read_text(encoding="utf-8"))
+    assert "closed" in record["estimated_planes"]["skipped"]  # no valve plane cut its meshes
     meshing = {r["mesh"]: r for r in csv.DictReader(open(results / "meshes" / "meshing.csv"))}
     assert meshing[f"{subject}_es.vtk"]["frame"] == "1"  # the table's ES frame
 

@@ -17,7 +17,10 @@ SPD matrices as on LDDMM momenta; the group tests and the linear model take arra
   or Pillai's trace), :func:`contrast_bases`, :func:`pillai_f`, :func:`pillai_to_hotelling`;
 - :mod:`.permutation_glm`: :func:`glm_test` (Freedman-Lane, Manly or Draper-Stoneman
   permutations, within blocks, family-wise error of the maximum, optional enhancement),
-  :func:`permutation_indices`, :func:`two_sided`, :func:`tfce_from_observed`;
+  :func:`permutation_indices`, :func:`permutation_chunks`, :func:`two_sided`,
+  :func:`tfce_from_observed`;
+- :mod:`.null_maps`: the statistic maps of chunks of permutations (one matrix product,
+  closed-form per-vertex algebra compiled), which :func:`glm_test` runs;
 - :mod:`.survival`: :func:`cross_validated_c_index` and
   :func:`cross_validated_c_index_from_motion` (Cox regression, lifelines; cross-validated
   C-index with a bootstrap interval), :func:`c_index`, :func:`simulate_survival`;
@@ -41,6 +44,7 @@ from .permutation_glm import (
     METHODS,
     GLMTest,
     glm_test,
+    permutation_chunks,
     permutation_indices,
     tfce_from_observed,
     two_sided,
@@ -89,6 +93,7 @@ __all__ = [
     "GLMTest",
     "glm_test",
     "permutation_indices",
+    "permutation_chunks",
     "two_sided",
     "tfce_from_observed",
     "SurvivalResult",

@@ -258,7 +258,8 @@ def fit_statistic(Y, X, C, ridge: float = 0.0) -> LinearFit:
     flat = y.reshape(n, k * d)
     q_x, r_x = np.linalg.qr(x)
     coefficients = linalg.solve_triangular(r_x, q_x.T @ flat)
-    residuals = flat - x @ coefficients
+    residuals = x @ coefficients
+    residuals = np.subtract(flat, residuals, out=residuals)  # one array of the data's size
     u_z, u_x = contrast_bases(x, c)
     sx = (u_x.T @ flat).reshape(q, k, d)
     res = residuals.reshape(n, k, d)

@@ -22,7 +22,8 @@ on ``P R_z``: with an orthonormal basis ``[U_x, U_z]`` of the design split by th
 contrast, each permutation needs the ``p`` projections ``[U_x, U_z]^T P R_z`` at all
 the vertices, one matrix product for a chunk of permutations; then ``H`` is the
 scatter of the ``U_x`` projections and ``H + E = R_z^T R_z`` minus that of the
-``U_z`` projections.
+``U_z`` projections (:class:`~.null_maps.NullMaps`: the product, and the statistic per
+permutation and vertex compiled).
 
 ``blocks`` restricts the permutations to exchangeability blocks (e.g. sites);
 ``enhance`` maps statistic maps to enhanced ones (e.g. threshold-free cluster
@@ -31,7 +32,8 @@ enhancement) and the family-wise error is then also computed on the enhanced map
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,20 +42,15 @@ from tqdm.auto import tqdm
 from manifolds.validation import check_rng
 
 from .design import Design, contrast_matrix
-from .linear_model import (
-    check_model,
-    check_responses,
-    contrast_bases,
-    fit_statistic,
-    scatter_entries,
-    statistic_of,
-)
+from .linear_model import check_model, check_responses, fit_statistic
+from .null_maps import NullMaps, block_codes
 from .tfce import tfce_enhancer, tfce_step
 
 __all__ = [
     "GLMTest",
     "glm_test",
     "permutation_indices",
+    "permutation_chunks",
     "two_sided",
     "tfce_from_observed",
     "METHODS",
@@ -62,7 +59,12 @@ __all__ = [
 #: The permutation strategies of :func:`glm_test`.
 METHODS = ("freedman_lane", "manly", "draper_stoneman")
 
-_CHUNK_BYTES = 64 * 2**20
+#: Memory of one chunk of permutations (their gathered design rows, projections, maps).
+_CHUNK_BYTES = 128 * 2**20
+#: The permutations are drawn in chunks of ``_DRAW_BYTES // (8 k (p d + d^2 + 8))``, the
+#: chunks in which the maps were once computed: the permutations of a seed within
+#: blocks, which depend on it, stay those of earlier versions.
+_DRAW_BYTES = 64 * 2**20
 
 
 @dataclass(frozen=True)
@@ -131,17 +133,61 @@ def permutation_indices(
     shape = (int(n_permutations), base.size)
     if blocks is None:
         return rng.permuted(np.broadcast_to(base, shape), axis=1)
-    labels = np.asarray(blocks)
-    if labels.shape != base.shape:
-        raise ValueError(
-            f"blocks: expected {base.size} labels (one per subject), got {labels.shape}"
-        )
-    codes = np.unique(labels, return_inverse=True)[1].reshape(-1)
+    codes = block_codes(blocks, base.size)
     out = np.broadcast_to(base, shape).copy()
     for code in range(codes.max() + 1):
         members = np.flatnonzero(codes == code)
         out[:, members] = rng.permuted(np.broadcast_to(members, (shape[0], members.size)), axis=1)
     return out
+
+
+def permutation_chunks(n_subjects: int, n_permutations: int, rng: np.random.Generator, blocks,
+                       size: int, draw: int) -> Iterator[np.ndarray]:  # fmt: skip
+    """The permutations of :func:`permutation_indices` in chunks, drawn ``draw`` at a time.
+
+    Within blocks the random stream depends on how many permutations are drawn at once,
+    so the draws keep their own size: a seed gives the same permutations whatever
+    ``size`` (without blocks the rows are drawn one after the other anyway).
+
+    Parameters
+    ----------
+    n_subjects, n_permutations : int
+    rng : numpy.random.Generator
+    blocks : array, shape (n,), or None
+        Exchangeability-block labels.
+    size : int
+        Permutations per chunk (the last chunk may be shorter).
+    draw : int
+        Permutations per call of :func:`permutation_indices` (ignored without blocks).
+
+    Yields
+    ------
+    ndarray of int, shape (size, n)
+    """
+    if blocks is None:
+        draw = size
+    pending, drawn = np.empty((0, int(n_subjects)), dtype=np.int64), 0
+    while drawn < n_permutations or len(pending):
+        parts = [pending]
+        have = len(pending)
+        while have < size and drawn < n_permutations:
+            m = min(draw, n_permutations - drawn)
+            parts.append(permutation_indices(n_subjects, m, rng, blocks))
+            drawn, have = drawn + m, have + m
+        chunk = parts[-1] if len(parts) == 2 and not len(pending) else np.concatenate(parts)
+        pending = chunk[size:]
+        yield chunk[:size]
+
+
+def _prefetched(items: Iterator) -> Iterator:
+    """The items of ``items``, each next one made in a worker thread while the caller uses
+    the current one (the permutations are drawn on one core while the maps of the previous
+    chunk use the others); the items and their order are those of ``items``."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        future = pool.submit(next, items, None)
+        while (item := future.result()) is not None:
+            future = pool.submit(next, items, None)
+            yield item
 
 
 def two_sided(enhance: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
@@ -202,61 +248,6 @@ def _enhanced(enhance, maps: np.ndarray) -> np.ndarray:
     return out
 
 
-class _Null:
-    """The statistic maps of chunks of permutations for one model and one method."""
-
-    def __init__(self, y, x, c, method, scalar, ridge):
-        n, k, d = y.shape
-        self.q, self.d, self.k, self.scalar = c.shape[0], d, k, scalar
-        self.df_resid, self.method = n - x.shape[1], method
-        u_z, u_x = contrast_bases(x, c)
-        flat = y.transpose(0, 2, 1).reshape(n, d * k)  # columns component-major
-        r_z = flat - u_z @ (u_z.T @ flat)
-        rz = r_z.reshape(n, d, k)
-        total = np.einsum("nik,njk->kij", rz, rz)
-        self.entries, self.floor, shift = scatter_entries(total, 0.0 if scalar else ridge)
-        self.u_z, self.u_x = u_z, u_x
-        if method == "manly":
-            ones = np.ones(n) / np.sqrt(n)
-            if np.linalg.norm(ones - u_z @ (u_z.T @ ones)) < 1e-8:
-                flat = flat - flat.mean(axis=0)  # the intercept is nuisance: no change
-            self.w = flat
-            wk = flat.reshape(n, d, k)
-            gram = np.einsum("nik,njk->kij", wk, wk)
-            self.entries = [
-                [gram[:, i, j] + (shift if i == j else 0.0) for j in range(d)] for i in range(d)
-            ]
-        else:
-            self.w = r_z
-        self.basis = np.vstack([u_x.T, u_z.T])  # (p, n): tested rows first
-
-    def bytes_per_permutation(self) -> int:
-        return 8 * self.k * (self.basis.shape[0] * self.d + self.d * self.d + 8)
-
-    def maps(self, perm: np.ndarray) -> np.ndarray:
-        """Statistic maps ``(m, k)`` of the permutations ``perm`` ``(m, n)``."""
-        m, q, d, k = perm.shape[0], self.q, self.d, self.k
-        if self.method == "draper_stoneman":
-            moved = self.u_x[perm]  # (m, n, q): the tested part of the design permuted
-            raw = (moved.transpose(0, 2, 1).reshape(m * q, -1) @ self.w).reshape(m, q, d, k)
-            overlap = np.einsum("nz,mnq->mzq", self.u_z, moved)
-            gram = np.eye(q) - np.einsum("mzq,mzr->mqr", overlap, overlap)
-            inv_chol = np.linalg.inv(np.linalg.cholesky(gram))
-            proj = np.einsum("mqr,mrdk->mqdk", inv_chol, raw)
-            sx = [[proj[:, r, i] for i in range(d)] for r in range(q)]
-            return statistic_of(sx, self.entries, self.df_resid, self.scalar, self.floor)
-        p = self.basis.shape[0]
-        gathered = self.basis[:, perm].transpose(1, 0, 2).reshape(m * p, -1)
-        proj = (gathered @ self.w).reshape(m, p, d, k)
-        sx = [[proj[:, r, i] for i in range(d)] for r in range(q)]
-        sz = [[proj[:, r, i] for i in range(d)] for r in range(q, p)]
-        entries = [
-            [self.entries[i][j] - sum(row[i] * row[j] for row in sz) for j in range(i + 1)]
-            for i in range(d)
-        ]
-        return statistic_of(sx, entries, self.df_resid, self.scalar, self.floor)
-
-
 def glm_test(
     Y,
     design: Design | np.ndarray,
@@ -299,7 +290,7 @@ def glm_test(
         enhancement (``H = 2``, ``E = 1``, step from the observed map) as ``enhance``
         (:func:`tfce_from_observed`); not with ``enhance``.
     chunk_size : int, optional
-        Permutations per matrix product (default: a 64 MB budget).
+        Permutations per matrix product (default: a 128 MB budget).
     progress : bool
         A progress bar over the chunks.
     ridge : float, default 1e-9
@@ -319,24 +310,32 @@ def glm_test(
     x, c, name = _model(design, contrast)
     x, c = check_model(x, c, y.shape[0], y.shape[2])
     fit = fit_statistic(y[..., 0] if scalar else y, x, c, ridge)
-    null = _Null(y, x, c, method, scalar, float(ridge))
+    null = NullMaps(y, x, c, method, scalar, float(ridge), blocks)
     if tfce is not None:
         if enhance is not None:
             raise ValueError("tfce: give tfce or enhance, not both")
         enhance = tfce_from_observed(fit.statistic, fit.kind, tfce)
     magnitude = np.abs if fit.kind == "t" else np.asarray
     observed_enhanced = None if enhance is None else _enhanced(enhance, fit.statistic[None])[0]
+    draw = chunk_size
     if chunk_size is None:
         chunk_size = max(1, min(n_permutations, _CHUNK_BYTES // null.bytes_per_permutation()))
+        n, k, d = y.shape
+        draw = max(1, _DRAW_BYTES // (8 * k * (x.shape[1] * d + d * d + 8)))
     max_null = np.empty(n_permutations)
     max_enhanced = None if enhance is None else np.empty(n_permutations)
-    starts = range(0, n_permutations, int(chunk_size))
-    for start in tqdm(starts, desc="permutations", disable=not progress, leave=False):
-        m = min(int(chunk_size), n_permutations - start)
-        maps = null.maps(permutation_indices(y.shape[0], m, rng, blocks))
+    chunks = _prefetched(
+        permutation_chunks(y.shape[0], n_permutations, rng, blocks, int(chunk_size), draw)
+    )
+    total = -(-n_permutations // int(chunk_size))
+    start = 0
+    for perm in tqdm(chunks, total=total, desc="permutations", disable=not progress, leave=False):
+        m = perm.shape[0]
+        maps = null.maps(perm)
         max_null[start : start + m] = magnitude(maps).max(axis=1)
         if enhance is not None:
             max_enhanced[start : start + m] = magnitude(_enhanced(enhance, maps)).max(axis=1)
+        start += m
     p_fwer = _fwer(magnitude(fit.statistic), max_null)
     p_enhanced = None if enhance is None else _fwer(magnitude(observed_enhanced), max_enhanced)
     return GLMTest(

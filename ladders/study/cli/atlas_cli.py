@@ -19,6 +19,7 @@ from .cli_types import (
     DefaultsFormatter,
     UsageError,
     existing_folder,
+    nonnegative_int,
     positive_float,
     positive_int,
 )
@@ -37,14 +38,23 @@ from .preparation_arguments import (
 __all__ = ["add_atlas_parser", "run_atlas_command"]
 
 
-def _library_default(name: str):
+def _library_default(name: str, build: bool = False):
     from ..preparation.atlas import estimate_atlas
+    from ..preparation.atlas_run import build_atlas
 
-    return inspect.signature(estimate_atlas).parameters[name].default
+    function = build_atlas if build else estimate_atlas
+    return inspect.signature(function).parameters[name].default
+
+
+def _subset_count(text: str) -> int | None:
+    """``all`` (None) or a positive number of subjects."""
+    return None if str(text).strip().lower() == "all" else positive_int(text)
 
 
 def add_atlas_parser(sub) -> None:
     """Register the ``atlas`` subcommand on an argparse subparsers object."""
+    from ..preparation.atlas_subset import SUBSET_RULES
+
     p = sub.add_parser(
         "atlas",
         help="estimate the LDDMM atlas (Karcher mean) of a cohort's ED meshes",
@@ -99,6 +109,26 @@ def add_atlas_parser(sub) -> None:
         help="iteration limit",
     )  # fmt: skip
     add_units_arguments(p, reference="that of the mesh of median size (taken to be in mm)")
+    p.add_argument(
+        "--subset", type=_subset_count, default=_library_default("subset", build=True),
+        metavar="N|all",
+        help="estimate the atlas from N subjects chosen by --subset-rule (every subject when "
+        "the folder has at most N; 'all': every subject), each weighted by the share of the "
+        "cohort it stands for; the record names them; every subject is then corresponded to "
+        "it as usual",
+    )  # fmt: skip
+    p.add_argument(
+        "--subset-rule", choices=SUBSET_RULES, default="stratified",
+        help="'stratified': k-means strata of the meshes' principal extents, one subject "
+        "nearest each stratum's centre; 'random': a seeded draw",
+    )  # fmt: skip
+    p.add_argument("--subset-seed", type=nonnegative_int, default=0,
+                   help="seed of the strata or of the draw")  # fmt: skip
+    p.add_argument(
+        "--no-resume", action="store_true",
+        help="estimate the atlas again even when OUTPUT holds a finished one with the same "
+        "inputs and settings (its record's key)",
+    )  # fmt: skip
     add_batch_arguments(p)
     p.set_defaults(run=run_atlas_command, output_is_file=True)
 
@@ -127,9 +157,13 @@ def run_atlas_command(args) -> int:
         _, term = atlas_term(inputs, initial, args.term)
     except ValueError as exc:
         raise UsageError(f"symladders atlas: error: --{exc}") from None
+    subset = ""
+    if args.subset is not None and args.subset < len(inputs.names):
+        subset = f" ({args.subset_rule} subset of {args.subset})"
+        label = label if args.start is not None else "the subset's first subject"
     print_line(
-        f"symladders atlas: {len(inputs.names)} ED mesh(es) from {args.meshes}, {term} term, "
-        f"start {label}, output {args.output}"
+        f"symladders atlas: {len(inputs.names)} ED mesh(es) from {args.meshes}{subset}, {term} "
+        f"term, start {label}, output {args.output}"
     )
     for name, reason in inputs.skipped.items():
         print(f"symladders atlas: warning: {name} left out: {reason}", file=sys.stderr)
@@ -139,7 +173,9 @@ def run_atlas_command(args) -> int:
                 args.meshes, args.output, correspondence_settings(args), start=args.start,
                 term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
                 progress=None if args.no_progress else _progress,
-                landmarks=landmarks_argument(args, args.meshes),
+                landmarks=landmarks_argument(args, args.meshes), subset=args.subset,
+                subset_rule=args.subset_rule, subset_seed=args.subset_seed, jobs=args.jobs,
+                resume=not args.no_resume,
             )  # fmt: skip
     except AtlasInterrupted as exc:
         args.on_interrupt = exc.message
@@ -147,6 +183,13 @@ def run_atlas_command(args) -> int:
     except LandmarkError as exc:
         raise UsageError(f"symladders atlas: error: --landmarks: {exc}") from None
     res = run.result
+    if run.reused:
+        print_line(
+            f"symladders atlas: reused {args.output}: finished before with the same inputs and "
+            f"settings (key {run.record['key']}, {res.n_iter} iteration(s)); --no-resume "
+            f"estimates it again"
+        )
+        return 1 if inputs.skipped else 0
     why = f"the limit, --max-iter {args.max_iter}" if res.n_iter >= args.max_iter else res.message
     state = "converged" if res.converged else "not converged"
     print_line(

@@ -49,7 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Symmetric components for shape analysis: ladders, symmetries, LDDMM.",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    add_run_parser(sub)
+    add_run_parser(sub, main)
     add_study_parser(sub)
     add_mesh_parser(sub)
     add_correspond_parser(sub)

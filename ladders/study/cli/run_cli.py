@@ -15,8 +15,9 @@ from .cli_types import DefaultsFormatter, UsageError
 __all__ = ["add_run_parser", "run_run_command"]
 
 
-def add_run_parser(sub) -> None:
-    """Register the ``run`` subcommand on an argparse subparsers object."""
+def add_run_parser(sub, execute) -> None:
+    """Register the ``run`` subcommand on an argparse subparsers object; ``execute(argv)``
+    runs ``symladders ARGV`` (the entry point, :func:`~.entry.main`), each step's command."""
     from ..route import STEP_NAMES
 
     p = sub.add_parser(
@@ -43,7 +44,7 @@ def add_run_parser(sub) -> None:
                         f"({', '.join(STEP_NAMES)})")  # fmt: skip
     p.add_argument("--template", action="store_true",
                    help="print a settings file with every key at its default, and stop")  # fmt: skip
-    p.set_defaults(run=run_run_command, output_is_file=False)
+    p.set_defaults(run=run_run_command, output_is_file=False, execute=execute)
 
 
 def _start_cluster(settings):
@@ -72,7 +73,6 @@ def _start_cluster(settings):
 def run_run_command(args) -> int:
     """Run the route from parsed arguments."""
     from ..route import RouteError, run_route, settings_template
-    from .entry import main
 
     if args.template:
         sys.stdout.write(settings_template())
@@ -84,7 +84,7 @@ def run_run_command(args) -> int:
         raise UsageError(f"symladders run: error: SETTINGS: no such file: {args.settings}")
     args.output = None
     try:
-        outcome = run_route(args.settings, main, dry_run=args.dry_run, redo=args.redo,
+        outcome = run_route(args.settings, args.execute, dry_run=args.dry_run, redo=args.redo,
                             echo=lambda line: print(line, flush=True),
                             start_cluster=_start_cluster)  # fmt: skip
     except RouteError as exc:

@@ -14,9 +14,12 @@
 - :mod:`.cohort_correspondence`: :func:`correspond_cohort`, a folder of
   segmentations into a folder the study reads, with a quality table
   (:mod:`.quality_table`), failures recorded and resume;
-- :mod:`.atlas`: :func:`estimate_atlas`, the LDDMM atlas of end-diastolic meshes;
-  :mod:`.atlas_run`: :func:`build_atlas`, the atlas of a folder written with its
-  record (what ``symladders atlas`` runs);
+- :mod:`.atlas`: :func:`estimate_atlas`, the LDDMM atlas of end-diastolic meshes, its
+  registrations run in parallel by :mod:`.atlas_registrations` (:class:`AtlasLogs`);
+  :mod:`.atlas_subset`: :func:`choose_atlas_subset`, the subjects an atlas of a large
+  cohort is estimated from; :mod:`.atlas_run`: :func:`build_atlas`, the atlas of a
+  folder written with its record (:mod:`.atlas_record`; what ``symladders atlas``
+  runs), reused when it is there with the same key;
 - :mod:`.surface_distance`: Hausdorff and mean surface distances;
 - :mod:`.remeshing`: :func:`remesh`, another triangulation of a surface;
   :mod:`.simulation`: :func:`simulate_segmentations` of a cohort (tests, tutorial).
@@ -32,7 +35,9 @@ from .alignment import (
     second_moments,
 )
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
+from .atlas_registrations import AtlasLogs, AtlasRegistration
 from .atlas_run import AtlasInterrupted, AtlasRun, build_atlas
+from .atlas_subset import SUBSET_RULES, AtlasSubset, choose_atlas_subset, shape_descriptor
 from .cohort_correspondence import CohortCorrespondence, correspond_cohort, scan_segmentations
 from .cohort_units import AtlasInputs, check_cohort_units, read_atlas_inputs
 from .correspondence import (
@@ -84,6 +89,12 @@ __all__ = [
     "build_atlas",
     "AtlasRun",
     "AtlasInterrupted",
+    "AtlasLogs",
+    "AtlasRegistration",
+    "AtlasSubset",
+    "SUBSET_RULES",
+    "choose_atlas_subset",
+    "shape_descriptor",
     "meshes_correspond",
     "AtlasInputs",
     "read_atlas_inputs",

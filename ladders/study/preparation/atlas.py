@@ -14,7 +14,9 @@ the long axis where the surfaces cannot tell, or follows anatomical landmarks
 where given: the atlas's landmarks are then those of the aligned subjects,
 averaged, with the apex and the septal point put back on the atlas's surface). Each iteration reports the total registration objective
 ``sum_i C_i`` and the norm of the averaged momenta; the result carries a
-convergence flag.
+convergence flag. The registrations of an iteration run through the batch runner
+(:class:`~.atlas_registrations.AtlasLogs`: ``jobs`` processes, or Dask), which keeps
+their objectives: the report registers nothing twice.
 """
 
 from __future__ import annotations
@@ -29,7 +31,9 @@ from manifolds.data_terms.mesh_geometry import check_mesh
 from manifolds.lddmm import LDDMMLandmarks
 from manifolds.validation import check_float, check_int
 
+from ..batch import run_batch
 from .alignment import SimilarityTransform, procrustes
+from .atlas_registrations import AtlasLogs
 from .correspondence_settings import CorrespondenceSettings
 from .landmarks import Landmarks
 from .rigid_fit import fit_rigid
@@ -61,6 +65,14 @@ class AtlasResult:
     message : str
     landmarks : Landmarks or None
         The atlas's landmarks, when the meshes' were given.
+    n_registrations : int
+        Registrations run: one per subject and iterate (the start included).
+    cpu_seconds : list of float
+        Per iterate (the start first), the processor time of its registrations, summed
+        over the subjects (core-seconds, whatever the number of workers).
+    moves : list of float
+        Per iteration, how far it moved the atlas (per-vertex RMS; what ``tol`` is
+        compared with).
     """
 
     vertices: np.ndarray
@@ -73,6 +85,9 @@ class AtlasResult:
     corresponding: bool = False
     message: str = ""
     landmarks: Landmarks | None = None
+    n_registrations: int = 0
+    cpu_seconds: list = field(default_factory=list)
+    moves: list = field(default_factory=list)
 
 
 def _start(meshes, initial, corresponding):
@@ -115,26 +130,30 @@ def _start_and_term(meshes, initial, surface_term):
     return start_v, start_f, corresponding, surface
 
 
+def align_onto_start(v, f, start_v, start_f, settings, landmarks=None, start_landmarks=None):
+    """The rigid motion of the mesh ``(v, f)`` onto the start, by :func:`fit_rigid` (the
+    batch's work function of the alignment of meshes that do not correspond)."""
+    return fit_rigid(
+        v, f, start_v, start_f, tolerance=settings.rotation_tolerance,
+        start_tolerance=settings.start_tolerance, source_landmarks=landmarks,
+        target_landmarks=start_landmarks,
+    ).transform  # fmt: skip
+
+
 def _aligned_targets(
-    meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm
+    meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm, jobs
 ):
     """The rigid alignment of each mesh onto the start (Procrustes when they correspond,
-    else :func:`fit_rigid`, with landmarks where given) and the registration targets (the
-    surface term's, or the vertices)."""
-    transforms = []
-    for i, (v, f) in enumerate(meshes):
-        if not align:
-            transforms.append(SimilarityTransform.identity())
-        elif corresponding:
-            transforms.append(procrustes(v, start_v))
-        else:
-            fit = fit_rigid(
-                v, f, start_v, start_f, tolerance=settings.rotation_tolerance,
-                start_tolerance=settings.start_tolerance,
-                source_landmarks=None if landmarks is None else landmarks[i],
-                target_landmarks=start_lm,
-            )  # fmt: skip
-            transforms.append(fit.transform)
+    else :func:`fit_rigid` through the batch runner, with landmarks where given) and the
+    registration targets (the surface term's, or the vertices)."""
+    if not align:
+        transforms = [SimilarityTransform.identity() for _ in meshes]
+    elif corresponding:
+        transforms = [procrustes(v, start_v) for v, _ in meshes]
+    else:
+        tasks = [(v, f, start_v, start_f, settings, None if landmarks is None else landmarks[i],
+                  start_lm) for i, (v, f) in enumerate(meshes)]  # fmt: skip
+        transforms = list(run_batch(align_onto_start, tasks, jobs=jobs, desc="alignment"))
     moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
     if not surface:
         return transforms, np.stack([v for v, _ in moved])
@@ -154,6 +173,8 @@ def estimate_atlas(
     checkpoint: Callable | None = None,
     landmarks: list | None = None,
     start_landmarks: Landmarks | None = None,
+    weights=None,
+    jobs: int = 1,
 ) -> AtlasResult:
     """LDDMM atlas of ``meshes`` (see the module).
 
@@ -190,6 +211,15 @@ def estimate_atlas(
         in the alignment onto the start.
     start_landmarks : Landmarks, optional
         The start's, when it is a mesh given (a subject's are ``landmarks[index]``).
+    weights : array, shape ``(n,)``, optional
+        Non-negative weights of the meshes in the mean (e.g. the size of the stratum
+        each stands for, :func:`~.atlas_subset.choose_atlas_subset`); equal by default.
+        The objective reported is then ``n sum_i w_i C_i`` (weights summing to one).
+    jobs : int, default 1
+        The rigid alignments, and the registrations of an iteration, run in parallel (:func:`~ladders.study.batch.run_batch`:
+        worker processes, ``-1`` one per core, or Dask under
+        ``joblib.parallel_config(backend="dask")``); the same atlas, to round-off,
+        whatever their number.
 
     Returns
     -------
@@ -203,30 +233,50 @@ def estimate_atlas(
     start_v, start_f, corresponding, surface = _start_and_term(meshes, initial, surface_term)
     start_lm = _start_landmarks(landmarks, start_landmarks, initial, len(meshes))
     transforms, targets = _aligned_targets(
-        meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm
-    )
+        meshes, start_v, start_f, corresponding, surface, align, settings, landmarks, start_lm,
+        jobs,
+    )  # fmt: skip
     space = LDDMMLandmarks(len(start_v), 3, alpha=settings.alpha, settings=settings.registration,
-                           cache_size=len(meshes) + 1)  # fmt: skip
-    objectives, previous = [], [start_v]
+                           cache_size=0)  # fmt: skip
+    logs = AtlasLogs(settings.alpha, space.settings, jobs=jobs)
+    w = _weights(weights, len(meshes))
+    objectives, previous, moves = [], [start_v], []
 
     def report(it, x, gnorm):
-        objectives.append(float(sum(space.register(x, t).objective for t in targets)))
+        objectives.append(logs.objective(w))  # of the registrations just run
         moved = float(np.sqrt(((x - previous[-1]) ** 2).sum(1).mean()))
         previous.append(x)
+        if it > 0:
+            moves.append(moved)
         if checkpoint is not None:
             checkpoint(it, np.array(x))
         if progress is not None:
             progress(it, objectives[-1], gnorm)
         return it > 0 and moved <= tol
 
-    res = frechet_mean(space, targets, initial=start_v, tol=0.0, max_iter=max_iter, callback=report)
+    res = frechet_mean(space, targets, w, initial=start_v, tol=0.0, max_iter=max_iter,
+                       callback=report, map_logs=logs)  # fmt: skip
     atlas_lm = None
     if landmarks is not None:
         atlas_lm = _atlas_landmarks(landmarks, transforms, np.array(res.mean), start_f)
     return AtlasResult(
         np.array(res.mean), start_f, res.converged, res.n_iter, objectives, res.gradient_norms,
-        transforms, not surface, res.message, atlas_lm,
+        transforms, not surface, res.message, atlas_lm, logs.n_registrations,
+        logs.cpu_seconds, moves,
     )  # fmt: skip
+
+
+def _weights(weights, n: int):
+    """The weights normalised to sum to one, or None (equal)."""
+    if weights is None:
+        return None
+    w = np.asarray(weights, dtype=float)
+    if w.shape != (n,) or not np.isfinite(w).all() or (w < 0).any() or w.sum() <= 0:
+        raise ValueError(
+            f"estimate_atlas: weights: expected {n} finite non-negative weights (one per mesh) "
+            f"with a positive sum, got shape {w.shape}"
+        )
+    return w / w.sum()
 
 
 def _start_landmarks(landmarks, start_landmarks, initial, n) -> Landmarks | None:

@@ -17,14 +17,17 @@ long axis follows its landmarks, and the atlas's own are written next to it as
 from __future__ import annotations
 
 import difflib
-import json
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..files import atomic_write_text, file_sha256
-from ..meshes import MESH_EXTENSIONS, read_mesh, write_mesh
+import numpy as np
+
+from ..files import file_sha256
+from ..meshes import MESH_EXTENSIONS, read_mesh
 from .atlas import AtlasResult, estimate_atlas, meshes_correspond
+from .atlas_record import atlas_fingerprint, atlas_record, reusable_atlas, write_atlas
+from .atlas_subset import choose_atlas_subset, shape_descriptor
 from .cohort_units import AtlasInputs, read_atlas_inputs
 from .correspondence_settings import CorrespondenceSettings
 from .landmarks import (
@@ -77,7 +80,9 @@ class AtlasInterrupted(KeyboardInterrupt):
 
 @dataclass
 class AtlasRun:
-    """What :func:`build_atlas` did: the estimate, the record and where both are."""
+    """What :func:`build_atlas` did: the estimate, the record and where both are; ``reused``:
+    a finished atlas of the same key was there (``result`` then read back: its vertices,
+    faces, convergence and history, no transforms)."""
 
     result: AtlasResult
     record: dict
@@ -86,6 +91,7 @@ class AtlasRun:
     inputs: AtlasInputs
     term: str
     start: str
+    reused: bool = False
 
 
 def resolve_atlas_start(inputs: AtlasInputs, start: str | None):
@@ -142,35 +148,6 @@ def atlas_term(inputs: AtlasInputs, initial, term: str = "auto") -> tuple[bool |
     return (None if term == "auto" else True), ("varifold" if term == "auto" else term)
 
 
-def _record(output, inputs, settings, label, result, tol, max_iter, interrupted) -> dict:
-    return {
-        "atlas": str(Path(output).resolve()),
-        "converged": bool(result.get("converged", False)) and not interrupted,
-        "interrupted": interrupted,
-        "n_iter": result["n_iter"],
-        "objectives": result["objectives"],
-        "gradient_norms": result.get("gradient_norms", []),
-        "term": result["term"],
-        "start": label,
-        "tol": tol,
-        "max_iter": max_iter,
-        "subjects": inputs.names,
-        "skipped": inputs.skipped,
-        "units": {**inputs.units.as_dict(), "reference": inputs.reference},
-        "settings": settings.as_dict(),
-        "input_files": {str(p.resolve()): file_sha256(p) for p in inputs.files},
-        "message": result.get("message", ""),
-    }
-
-
-def _write(output: Path, vertices, faces, record: dict) -> Path:
-    output.parent.mkdir(parents=True, exist_ok=True)
-    write_mesh(output, vertices, faces, atomic=True)
-    path = output.with_suffix(".json")
-    atomic_write_text(path, json.dumps(record, indent=1, default=str))
-    return path
-
-
 def build_atlas(
     meshes,
     output,
@@ -185,6 +162,11 @@ def build_atlas(
     progress: Callable | None = None,
     inputs: AtlasInputs | None = None,
     landmarks=None,
+    subset: int | None = 50,
+    subset_rule: str = "stratified",
+    subset_seed: int = 0,
+    jobs: int = 1,
+    resume: bool = True,
 ) -> AtlasRun:
     """Estimate the atlas of the ED meshes of the folder ``meshes`` and write it to ``output``.
 
@@ -197,7 +179,8 @@ def build_atlas(
     settings : CorrespondenceSettings, optional
         Registration settings; with a surface term, its data term is the one resolved.
     start, term
-        As :func:`resolve_atlas_start` and :func:`atlas_term`.
+        As :func:`resolve_atlas_start` and :func:`atlas_term`; with a subset, the default
+        start is the subset's first subject, and a subject outside it may be named.
     tol, max_iter, progress
         As :func:`estimate_atlas` (``progress(it, objective, norm)`` per iteration).
     units, allow_scale
@@ -207,6 +190,19 @@ def build_atlas(
     landmarks : str, Path, dict or False, optional
         A landmark table (:mod:`.landmarks`) or ``{subject: Landmarks}``; by default
         ``landmarks.csv`` of the folder when there is one; False: none.
+    subset : int or None, default 50
+        Estimate the atlas from this many subjects (every subject when there are at most
+        that many), chosen by ``subset_rule`` (:func:`~.atlas_subset.choose_atlas_subset`
+        on every mesh's :func:`~.atlas_subset.shape_descriptor`), each weighted by the
+        share of the cohort it stands for; the record names them. None: every subject.
+        (The default: ``docs/preparation.md``, "The atlas at population scale".)
+    subset_rule : {"stratified", "random"}
+    subset_seed : int, default 0
+    jobs : int, default 1
+        Registrations of an iteration in parallel (:func:`estimate_atlas`).
+    resume : bool, default True
+        Reuse the atlas at ``output`` when its record has this run's key (the same
+        inputs, settings, start, term, tolerance and subset) and it finished.
 
     Raises
     ------
@@ -220,11 +216,40 @@ def build_atlas(
     output = Path(output)
     if inputs is None:
         inputs = read_atlas_inputs(meshes, units=units, allow_scale=allow_scale)
+    chosen = _subset(inputs, subset, subset_rule, subset_seed)
+    if start is None and chosen is not None:
+        start = inputs.names[chosen.indices[0]]
     initial, label = resolve_atlas_start(inputs, start)
     surface, name = atlas_term(inputs, initial, term)
     settings = settings or CorrespondenceSettings()
     if name != "landmarks":
         settings = settings.replace(data_term=name)
+    rows, start_lm = _landmark_list(landmarks, meshes, inputs)
+    if rows is not None and isinstance(initial, tuple) and start_lm is None:
+        sidecar = atlas_landmarks_path(start) if start else None
+        if sidecar is None or not sidecar.is_file():
+            raise LandmarkError(
+                f"landmarks: the start {start} has none: add its row 'atlas' to the table or "
+                f"write them to {sidecar}"
+            )
+        start_lm = read_landmarks(sidecar).get("atlas")
+    hashes = {str(p.resolve()): file_sha256(p) for p in inputs.files}
+    rule = None if chosen is None else {"rule": chosen.rule, "n": subset, "seed": chosen.seed}
+    fingerprint = atlas_fingerprint(
+        inputs, hashes, settings, term=name, start=label, tol=tol, max_iter=max_iter,
+        subset=rule, landmarks=None if rows is None else [*rows, start_lm],
+    )  # fmt: skip
+    faces = initial[1] if isinstance(initial, tuple) else inputs.meshes[
+        0 if initial == "mean" else initial
+    ][1]  # fmt: skip
+    stored = reusable_atlas(output, fingerprint["key"]) if resume else None
+    if stored is not None:
+        return _reused(stored, output, inputs, name, label)
+    used, weights, initial, start_lm = _restrict(inputs, chosen, initial, rows, start_lm)
+    subset_record = None if chosen is None else {
+        **rule, "from": len(inputs.names), "descriptor": "principal RMS extents (mm)",
+        "weights": {inputs.names[i]: float(w) for i, w in zip(chosen.indices, chosen.weights)},
+    }  # fmt: skip
     seen: dict = {"objectives": [], "gradient_norms": []}
 
     def report(it, objective, norm):
@@ -236,39 +261,71 @@ def build_atlas(
     def checkpoint(it, vertices):
         seen.update(n_iter=it, vertices=vertices)
 
-    rows, start_lm = _landmark_list(landmarks, meshes, inputs)
-    if rows is not None and isinstance(initial, tuple) and start_lm is None:
-        sidecar = atlas_landmarks_path(start) if start else None
-        if sidecar is None or not sidecar.is_file():
-            raise LandmarkError(
-                f"landmarks: the start {start} has none: add its row 'atlas' to the table or "
-                f"write them to {sidecar}"
-            )
-        start_lm = read_landmarks(sidecar).get("atlas")
+    def record_of(result: dict, interrupted: bool) -> dict:
+        result = {**result, "term": name, "subjects": [inputs.names[i] for i in used]}
+        return atlas_record(output, inputs, settings, label, result, tol, max_iter,
+                            interrupted, input_hashes=hashes, key=fingerprint["key"],
+                            subset=subset_record)  # fmt: skip
+
     try:
         res = estimate_atlas(
-            inputs.meshes, settings, initial=initial, tol=tol, max_iter=max_iter,
-            progress=report, surface_term=surface, checkpoint=checkpoint, landmarks=rows,
-            start_landmarks=start_lm,
+            [inputs.meshes[i] for i in used], settings, initial=initial, tol=tol,
+            max_iter=max_iter, progress=report, surface_term=surface, checkpoint=checkpoint,
+            landmarks=None if rows is None else [rows[i] for i in used],
+            start_landmarks=start_lm, weights=weights, jobs=jobs,
         )  # fmt: skip
     except KeyboardInterrupt:
         if seen.get("n_iter", 0) < 1:
             raise
-        faces = initial[1] if isinstance(initial, tuple) else inputs.meshes[
-            0 if initial == "mean" else initial
-        ][1]  # fmt: skip
-        result = {**seen, "term": name}
-        record = _record(output, inputs, settings, label, result, tol, max_iter, True)
-        _write(output, seen["vertices"], faces, record)
+        write_atlas(output, seen["vertices"], faces, record_of(seen, True))
         raise AtlasInterrupted(
             f"the iterate of iteration {seen['n_iter']} was written to {output}; continue "
             f"with --start {output}"
         ) from None
-    record = _record(output, inputs, settings, label, {**vars(res), "term": name}, tol,
-                     max_iter, False)  # fmt: skip
+    record = record_of(vars(res), False)
     if res.landmarks is not None:
         record["landmarks"] = str(
             write_landmarks(atlas_landmarks_path(output), {"atlas": res.landmarks})
         )
-    path = _write(output, res.vertices, res.faces, record)
+    path = write_atlas(output, res.vertices, res.faces, record)
     return AtlasRun(res, record, output, path, inputs, name, label)
+
+
+def _subset(inputs: AtlasInputs, n, rule, seed):
+    """The subset of ``inputs`` to estimate the atlas from, or None (every subject)."""
+    if n is None:
+        return None
+    descriptors = np.array([shape_descriptor(v, f) for v, f in inputs.meshes])
+    try:
+        return choose_atlas_subset(descriptors, n, rule, seed)
+    except ValueError as exc:
+        raise ValueError(f"subset: {str(exc).removeprefix('choose_atlas_subset: ')}") from None
+
+
+def _restrict(inputs: AtlasInputs, chosen, initial, rows, start_lm):
+    """The subjects used (indices), their weights, and the start and its landmarks in
+    terms of them: a start subject outside the subset is given as its mesh."""
+    if chosen is None:
+        return list(range(len(inputs.names))), None, initial, start_lm
+    used = [int(i) for i in chosen.indices]
+    if isinstance(initial, int | np.integer) and not isinstance(initial, bool):
+        if initial in used:
+            initial = used.index(initial)
+        else:
+            start_lm = None if rows is None else rows[initial]
+            initial = inputs.meshes[initial]
+    return used, chosen.weights, initial, start_lm
+
+
+def _reused(record: dict, output: Path, inputs: AtlasInputs, term: str, label: str) -> AtlasRun:
+    vertices, faces = read_mesh(output)
+    lm = None
+    if record.get("landmarks") and Path(record["landmarks"]).is_file():
+        lm = read_landmarks(record["landmarks"]).get("atlas")
+    result = AtlasResult(
+        vertices, faces, bool(record["converged"]), int(record["n_iter"]),
+        list(record["objectives"]), list(record.get("gradient_norms", [])), [],
+        term == "landmarks", record.get("message", ""), lm, 0,
+    )  # fmt: skip
+    return AtlasRun(result, record, output, output.with_suffix(".json"), inputs, term, label,
+                    reused=True)  # fmt: skip

@@ -133,7 +133,8 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
     landmarks = ["--landmarks", inputs.landmarks] if table.has_landmarks else []
     # the atlas keeps its line per iteration: the long step's progress, in its log
     argv = ["--meshes", meshes, "-o", atlas, *landmarks, "--max-iter",
-            str(settings["atlas"]["max_iter"]), *[a for a in batch if a != "--no-progress"]]  # fmt: skip
+            str(settings["atlas"]["max_iter"]), "--subset", str(settings["atlas"]["subset"]),
+            *[a for a in batch if a != "--no-progress"]]  # fmt: skip
     steps.append(Step("atlas", "atlas", argv, [meshes, *landmarks[1:]], [atlas_dir], [],
                       "the mean ED shape of the subjects"))  # fmt: skip
     argv = ["--atlas", atlas, "--meshes", meshes, "-o", corresponded, *landmarks, *batch]

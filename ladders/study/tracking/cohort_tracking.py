@@ -62,6 +62,7 @@ from ..files import atomic_write_text, file_sha256
 from ..imaging.surface_extraction import MeshingSettings, extract_surface
 from ..meshes.mesh_io import read_mesh, write_mesh
 from ..preparation.alignment import SimilarityTransform
+from ..volume import boundary_vertices
 from .base_planes import estimate_base_planes, gather_plane_table, planes_wanted
 from .cine_tracking import CineTrackingSettings, track_cine
 from .epicardium_tracking import EPICARDIUM_FOLDER, track_cine_with_epicardium, track_epicardium
@@ -238,7 +239,8 @@ def _track_one(task: TrackingTask, output: Path, label: int, settings: TrackingS
                 estimate = estimate_base_planes(scanner, faces, frames, label)
                 record["estimated_planes"] = estimate.as_dict()
                 planes = {str(t): [float(x) for x in p] for t, p in enumerate(estimate.planes)}
-            elif not planes and getattr(settings, "estimate_planes", "never") != "never":
+            elif (not planes and getattr(settings, "estimate_planes", "never") != "never"
+                  and len(boundary_vertices(faces)) == 0):  # fmt: skip
                 record["estimated_planes"] = {"skipped": "the ED mesh is closed (its label was "
                                               "meshed without a valve plane): the estimate "
                                               "starts from an open mesh's rim"}  # fmt: skip
