@@ -92,6 +92,10 @@ IMAGES = {"tagged": TagGrid(), "plain": None}
 ALPHA2 = 100.0
 
 
+#: The summary these tables report: the peak (the other summaries are not computed).
+PEAK = ("peak",)
+
+
 def _cycles(name, n, n_frames):
     return make_two_group_cycles(n_subjects=n, abnormality=COHORTS[name], n_frames=n_frames)
 
@@ -157,8 +161,9 @@ def _tests(motion: CycleMotion, labels, es: int, permutations: int, rng, axis):
     """Significant vertices of the ES displacement, peak rotation, normal peak and normal
     peak with TFCE tests."""
     displacement = motion.displacement[:, es] - motion.displacement[:, 0]
-    rotation = compare_cycles(motion, labels, permutations, rng, measure="rotation", axis=axis)
-    normal = compare_cycles(motion, labels, permutations, rng, tfce=True)
+    rotation = compare_cycles(motion, labels, permutations, rng, measure="rotation", axis=axis,
+                              summaries=PEAK)  # fmt: skip
+    normal = compare_cycles(motion, labels, permutations, rng, tfce=True, summaries=PEAK)
     return (
         vertexwise_test(displacement, labels, permutations, rng).p_fwer < 0.05,
         rotation.peak.p_fwer < 0.05,
@@ -174,8 +179,9 @@ TESTS_SMOOTHED = "normal peak, normal peak TFCE, both on maps smoothed by fwhm"
 def _tests_smoothed(motion: CycleMotion, labels, es, permutations: int, rng, axis, fwhm):
     """Significant vertices of the normal peak and its TFCE, on the raw maps and on the
     maps smoothed by ``fwhm`` (mm)."""
-    raw = compare_cycles(motion, labels, permutations, rng, tfce=True)
-    smooth = compare_cycles(motion, labels, permutations, rng, tfce=True, fwhm=fwhm)
+    raw = compare_cycles(motion, labels, permutations, rng, tfce=True, summaries=PEAK)
+    smooth = compare_cycles(motion, labels, permutations, rng, tfce=True, fwhm=fwhm,
+                            summaries=PEAK)  # fmt: skip
     return tuple(t for r in (raw, smooth)
                  for t in (r.peak.p_fwer < 0.05, r.peak_tfce.p_fwer_enhanced < 0.05))  # fmt: skip
 
@@ -186,7 +192,7 @@ TESTS_TRANSPORT = "normal peak, normal peak TFCE"
 
 def _tests_normal(motion: CycleMotion, labels, permutations: int, rng):
     """Significant vertices of the normal peak and of its TFCE."""
-    normal = compare_cycles(motion, labels, permutations, rng, tfce=True)
+    normal = compare_cycles(motion, labels, permutations, rng, tfce=True, summaries=PEAK)
     return normal.peak.p_fwer < 0.05, normal.peak_tfce.p_fwer_enhanced < 0.05
 
 

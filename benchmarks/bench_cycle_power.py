@@ -110,7 +110,7 @@ def rows(routes_work, cine_work, n: int, n_frames: int) -> list[tuple]:
             for t_index, tested in enumerate((None, cap)):
                 rng = np.random.default_rng([m_index, f_index, t_index])
                 tests = compare_cycles(motion, labels, PERMUTATIONS, rng, vertices=tested,
-                                       fwhm=fwhm)  # fmt: skip
+                                       fwhm=fwhm, summaries=("peak",))  # fmt: skip
                 reg = region if tested is None else region & tested
                 found = tests.peak.p_fwer < 0.05
                 threshold = float(np.quantile(tests.peak.max_null, 0.95))

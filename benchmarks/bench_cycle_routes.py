@@ -168,7 +168,7 @@ def _null_rates(motion, controls, rng, repetitions: int, permutations: int, test
     hits = np.zeros(2, dtype=int)
     for sub, labels in null_splits(motion, controls, rng, repetitions):
         tests = compare_cycles(sub, labels, permutations, rng, tfce=True, vertices=tested,
-                               fwhm=fwhm)  # fmt: skip
+                               fwhm=fwhm, summaries=("peak",))  # fmt: skip
         hits += [(tests.peak.p_fwer < 0.05).any(),
                  (tests.peak_tfce.p_fwer_enhanced < 0.05).any()]  # fmt: skip
     return [(h / repetitions, *binomial_interval(int(h), repetitions)) for h in hits]
@@ -184,7 +184,7 @@ def _scores(motion, c, region, permutations, repetitions, rng, tested=None, fwhm
     """Power and Dice (max-t, TFCE) over the region tested, and the null FWER of both."""
     patients = np.array([c.patients[c.names.index(s)] for s in motion.subjects])
     tests = compare_cycles(motion, patients, permutations, rng, tfce=True, vertices=tested,
-                           fwhm=fwhm)  # fmt: skip
+                           fwhm=fwhm, summaries=("peak",))  # fmt: skip
     reg = region if tested is None else region & tested
     found = tests.peak.p_fwer < 0.05
     enhanced = tests.peak_tfce.p_fwer_enhanced < 0.05

@@ -75,7 +75,7 @@ def track_variant(work: Path, label: str, jobs: int) -> None:
 
 def _tests(motion, patients, region, tested, permutations):
     tests = compare_cycles(motion, patients, permutations, np.random.default_rng(0), tfce=True,
-                           vertices=tested)  # fmt: skip
+                           vertices=tested, summaries=("peak",))  # fmt: skip
     found = tests.peak.p_fwer < 0.05
     enhanced = tests.peak_tfce.p_fwer_enhanced < 0.05
     reg = region & (np.ones_like(region) if tested is None else tested)

@@ -27,8 +27,9 @@ from generated_tables import machine, publish  # noqa: E402
 
 #: The tutorial, in order: (what it does, the command).
 COMMANDS = (
-    ("a synthetic cohort through the cycle: 4-D label series, groups, ED landmarks, truth",
-     "symladders cohort --cycle 25 --subjects 12 --landmarks -o cohort"),
+    ("a synthetic cohort through the cycle: 4-D label series, groups, covariates (the "
+     "patients older and larger), ED landmarks, truth",
+     "symladders cohort --cycle 25 --subjects 12 --imbalance 0.5 --landmarks -o cohort"),
     ("mesh the ED and ES frames (ES is frame 9 of 25, cohort/cycle.json)",
      "symladders mesh cohort/images/*.nii.gz --label 1 --frames 0,9 -o meshes --no-progress"),
     ("put every ED mesh in the atlas's vertex correspondence",
@@ -40,10 +41,16 @@ COMMANDS = (
     ("transport every frame's motion to the atlas (pole ladder)",
      "symladders cycle-study tracked --atlas cohort/atlas.vtk --alpha2 100 -o cycle_study "
      "--no-progress"),
-    ("test the groups per frame, on the peak and on the time to peak, without the apical "
-     "cap (AHA segment 17) that 8 mm slices resolve poorly",
+    ("test the groups per frame, on the peak, on the time to peak and on the whole "
+     "trajectory, without the apical cap (AHA segment 17) that 8 mm slices resolve poorly",
      "symladders cycle-analyze cycle_study --groups cohort/groups.csv "
-     "--compare patients controls --tfce --aha cohort/landmarks.csv --exclude-segments 17"),
+     "--compare patients,controls --tfce --aha cohort/landmarks.csv --exclude-segments 17 "
+     "--no-progress"),
+    ("the same tests adjusted for age, sex and body size, and the effect of age",
+     "symladders cycle-analyze cycle_study --design cohort/design.csv "
+     "--model 'group + age + sex + body_size' "
+     "--contrast 'group[patients] - group[controls]' age --tfce --aha cohort/landmarks.csv "
+     "--exclude-segments 17 --no-progress -o cycle_study/adjusted"),
 )  # fmt: skip
 
 

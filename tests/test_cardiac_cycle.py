@@ -14,10 +14,12 @@ from ladders.study.cohort import (
     check_invertible,
     cycle_fraction,
     cycle_frames,
+    frame_abnormality,
     frame_times,
     motion_forward,
     motion_inverse,
     planted_modulation,
+    planted_region,
 )
 from ladders.study.cohort.cardiac_cycle import _endocardium
 from ladders.study.cohort.synthetic_lv import grid_shape, lv_grid, lv_shapes
@@ -42,6 +44,9 @@ from ladders.study.volume import enclosed_volume
 
 GRID = lv_grid(*grid_shape(241))
 FINE = lv_grid(*grid_shape(1009))
+DELAY = MotionAbnormality("delay", transition_height=0.1)
+#: A delay at two times of the cycle: less motion than the rest early, more late.
+DELAYED = [frame_abnormality(DELAY, 0.2), frame_abnormality(DELAY, 0.8)]
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +92,7 @@ def test_forward_at_one_is_the_end_systole_of_lv_shapes(params, abnormality):
 
 @pytest.mark.parametrize(
     "abnormality",
-    [None, MotionAbnormality("radial"), MotionAbnormality("twist"), CYCLE_ABNORMALITY],
+    [None, MotionAbnormality("radial"), MotionAbnormality("twist"), CYCLE_ABNORMALITY, *DELAYED],
 )
 def test_inverse_undoes_forward_in_the_volume(params, abnormality):
     rng = np.random.default_rng(7)
@@ -119,7 +124,7 @@ def _jacobian_determinant(params, x, f, abnormality, h=1e-4):
 
 @pytest.mark.parametrize(
     "abnormality",
-    [None, MotionAbnormality("radial"), MotionAbnormality("twist"), CYCLE_ABNORMALITY],
+    [None, MotionAbnormality("radial"), MotionAbnormality("twist"), CYCLE_ABNORMALITY, *DELAYED],
 )
 def test_the_wall_is_incompressible(params, abnormality):
     rng = np.random.default_rng(11)
@@ -207,6 +212,44 @@ def test_every_subject_of_the_cycle_cohort_renders():
         cycles.render_labels(0, affine, (4, 4, 4), 20)
     with pytest.raises(CohortError, match="^subject: "):
         cycles.render_cine("nobody", affine, (4, 4, 4), 0)
+
+
+def test_a_delayed_contraction_peaks_later_with_the_same_amplitude():
+    """The delay's segments follow the time course of an end-systole a tenth of the cycle
+    later: their normal motion peaks 0.1 later and as deep; elsewhere, and in the controls,
+    the motion is that of the cohort without it; ED is unchanged. At end-systole the
+    delayed segments have reached cycle_fraction(0.35, 0.45) of their motion (the ED-ES
+    cohort's planted shape). A delay is refused where only a fraction of the motion is
+    given, and when it ends the contraction after the cycle."""
+    from ladders.study.sequences import CycleMotion, curve_peaks
+
+    delayed = make_two_group_cycles(6, DELAY, n_frames=40, n_vertices=241, seed=1)
+    plain = make_two_group_cycles(6, None, n_frames=40, n_vertices=241, seed=1, check=False)
+    assert (delayed.check_invertible() > 0).all()
+    patients, weight = delayed.patients, delayed.data.region.weight
+    peaks, times = {}, {}
+    for name, c in (("delayed", delayed), ("plain", plain)):
+        m = CycleMotion(c.names, c.frames - c.frames[:, :1], c.data.cohort.atlas, c.faces)
+        peaks[name], times[name] = curve_peaks(m.normal())
+    inside, outside = weight > 0.999, weight < 1e-6
+    shift = times["delayed"][patients][:, inside] - times["plain"][patients][:, inside]
+    np.testing.assert_allclose(shift, 0.1, atol=0.005)  # a fifth of a frame
+    ratio = peaks["delayed"][patients][:, inside] / peaks["plain"][patients][:, inside]
+    np.testing.assert_allclose(ratio, 1.0, atol=2e-3)
+    np.testing.assert_allclose(delayed.frames[:, :, outside], plain.frames[:, :, outside],
+                               atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(delayed.frames[~patients], plain.frames[~patients], atol=1e-12)
+    np.testing.assert_allclose(delayed.frames[:, 0], plain.frames[:, 0], atol=1e-12)
+    theta, phi, _ = GRID
+    at_es, region = planted_modulation(DELAY, theta, phi), planted_region(DELAY, theta, phi)
+    expected = 1.0 - region.weight * (1.0 - cycle_fraction(0.35, 0.45))
+    for factor in (at_es.radial, at_es.longitudinal, at_es.rotation):
+        np.testing.assert_allclose(factor, expected, atol=1e-12)
+    with pytest.raises(CohortError, match="a delay depends on the time of the cycle"):
+        motion_forward(SubjectParameters.mean(SyntheticLVModel()), theta[:, None] * [0, 0, 1],
+                       0.5, DELAY)  # fmt: skip
+    with pytest.raises(CohortError, match=r"es_phase \+ delay must be < 1"):
+        frame_abnormality(replace(DELAY, magnitude=0.7), 0.5)
 
 
 def test_myocardium_around_the_end_diastolic_cavity(params):

@@ -37,16 +37,8 @@ EXCEPTIONS = {
     ("--deformation", "study"): "the study runs and compares several models, NAME[,NAME...] "
     "('both': lddmm,svf); cycle-study and validate run one",
 }
-#: cycle-analyze still takes --compare GROUP REFERENCE, --seed of any integer, an --output
-#: without metavar and a --permutations without help; its parser is to use the shared
-#: definitions (common_arguments), and these entries then go.
-PENDING = {
-    ("--compare", "cycle-analyze"),
-    ("--output", "cycle-analyze"),
-    ("--permutations", "cycle-analyze"),
-    ("--seed", "cycle-analyze"),
-    ("study", "cycle-analyze"),
-}
+#: Options waiting for their shared definition (none now).
+PENDING: set = set()
 
 
 def _commands() -> dict[str, argparse.ArgumentParser]:

@@ -111,7 +111,7 @@ def test_cli_writes_the_cycle_cohort_and_refuses_what_it_cannot_do(tmp_path, cap
     assert len(list((out / "images").glob("*.nii.gz"))) == 6
     assert json.loads((out / "cycle.json").read_text())["voxel_mm"] == [2.0, 2.0, 6.0]
     for extra, message in ((["--pose"], "--pose: not with --cycle"),
-                           (["--design"], "--design: not with --cycle"),
+                           (["--remesh", "2"], "--remesh: not with --cycle"),
                            (["--ext", "ply"], "--ext: not with --cycle"),
                            (["--noise-length", "5"], "--noise-length: not with --cycle"),
                            (["--tagging"], "--tagging: only with --images cine"),

@@ -165,7 +165,8 @@ def test_tfce_on_the_peak_keeps_a_region_that_vertex_noise_hides():
     the peak's ``t`` is the same as the max-t test's, and TFCE finds more of the planted
     region than the maximum statistic, with as few false vertices; nothing under the null."""
     c, motion = _noisy_cycles()
-    tests = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True)
+    tests = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True,
+                           summaries=("peak",))  # fmt: skip
     np.testing.assert_allclose(tests.peak_tfce.statistic, tests.peak.statistic, rtol=1e-7)
     region = c.data.region.weight > 0
     max_t, enhanced = tests.peak.p_fwer < 0.05, tests.peak_tfce.p_fwer_enhanced < 0.05
@@ -173,7 +174,7 @@ def test_tfce_on_the_peak_keeps_a_region_that_vertex_noise_hides():
     assert (enhanced & ~region).sum() <= 0.02 * len(region)
     controls, null = _controls_only(c, motion)
     null_tests = compare_cycles(null, np.arange(len(controls)) % 2 == 0, 1000,
-                                np.random.default_rng(2), tfce=True)  # fmt: skip
+                                np.random.default_rng(2), tfce=True, summaries=("peak",))  # fmt: skip
     assert (null_tests.peak_tfce.p_fwer_enhanced < 0.05).sum() <= 0.01 * len(region)
     assert compare_cycles(null, np.arange(len(controls)) % 2 == 0, 10,
                           np.random.default_rng(2)).peak_tfce is None  # fmt: skip
@@ -236,9 +237,10 @@ def test_leaving_a_noisy_apical_cap_out_keeps_the_power_of_the_rest():
     motion = CycleMotion(c.names, d + error * (np.arange(d.shape[1]) > 0)[None, :, None, None],
                          c.data.cohort.atlas, c.faces)  # fmt: skip
     region = c.data.region.affected & ~cap
-    full = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True)
+    full = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True,
+                          summaries=("peak", "per_frame"))  # fmt: skip
     part = compare_cycles(motion, c.patients, 1000, np.random.default_rng(0), tfce=True,
-                          vertices=~cap)  # fmt: skip
+                          vertices=~cap, summaries=("peak", "per_frame"))  # fmt: skip
     np.testing.assert_allclose(part.peak.statistic[~cap], full.peak.statistic[~cap], rtol=1e-7)
     assert np.isnan(part.peak.statistic[cap]).all() and np.isnan(part.peak.p_fwer[cap]).all()
     assert np.isnan(part.peak_tfce.p_fwer_enhanced[cap]).all()
@@ -285,7 +287,7 @@ def test_the_rotation_finds_a_planted_twist_that_the_normal_motion_does_not_see(
     for _ in range(40):  # the null FWER over random splits of the controls
         split = np.isin(np.arange(len(controls)), rng.permutation(len(controls))[:6])
         null_tests = compare_cycles(null, split, 200, rng, measure="rotation",
-                                    axis=np.stack([lm.apex, lm.base]))  # fmt: skip
+                                    axis=np.stack([lm.apex, lm.base]), summaries=("peak",))  # fmt: skip
         hits += bool((null_tests.peak.p_fwer < 0.05).any())
     assert hits / 40 <= 0.15  # nominal 0.05; 7 or more of 40 has probability 0.014
     turns = np.linspace(0.0, 12.0, 12)
@@ -347,20 +349,18 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
     assert "6 transported" in capsys.readouterr().out
     assert main(argv) == 0 and "6 already done" in capsys.readouterr().out
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--permutations", "200", "--tfce"]) == 0  # fmt: skip
+                 "--permutations", "200", "--no-figures", "--tfce"]) == 0  # fmt: skip
     assert "(TFCE: " in capsys.readouterr().out
     rows = list(csv.DictReader(open(study / "analysis" / "cycle_vertices.csv")))
     assert len(rows) == len(atlas) and all(0 < float(r["peak_tfce_p_fwer"]) <= 1 for r in rows)
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--permutations", "200"]) == 0  # fmt: skip
+                 "--permutations", "200", "--no-figures"]) == 0  # fmt: skip
     assert "vertices found at FWER 5 %" in capsys.readouterr().out
-    raw = np.loadtxt(study / "analysis" / "cycle_vertices.csv", delimiter=",", skiprows=1,
-                     usecols=1)  # fmt: skip
+    raw = _column(study / "analysis" / "cycle_vertices.csv", "peak_group1_mm")
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--permutations", "200", "--fwhm", "12", "-o", str(tmp_path / "fwhm")]) == 0  # fmt: skip
+                 "--permutations", "200", "--no-figures", "--fwhm", "12", "-o", str(tmp_path / "fwhm")]) == 0  # fmt: skip
     assert ", smoothed 12 mm FWHM: " in capsys.readouterr().out
-    smooth = np.loadtxt(tmp_path / "fwhm" / "cycle_vertices.csv", delimiter=",", skiprows=1,
-                        usecols=1)  # fmt: skip
+    smooth = _column(tmp_path / "fwhm" / "cycle_vertices.csv", "peak_group1_mm")
     assert 0 < np.std(smooth) < np.std(raw)  # the group's mean peak map, smoothed
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
                  "--fwhm", "0"]) == 2  # fmt: skip
@@ -370,14 +370,14 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
         lm.base.tolist(), "septal_point": lm.septum.tolist()}))  # fmt: skip
     cap = _apical_cap(cycles)
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--permutations", "200", "--tfce", "--aha", str(tmp_path / "aha.json"),
+                 "--permutations", "200", "--no-figures", "--tfce", "--aha", str(tmp_path / "aha.json"),
                  "--exclude-segments", "17", "-o", str(tmp_path / "no17")]) == 0  # fmt: skip
     assert f"(of {int((~cap).sum())} vertices tested)" in capsys.readouterr().out
     rows = list(csv.DictReader(open(tmp_path / "no17" / "cycle_vertices.csv")))
     assert [r["tested"] == "1" for r in rows] == list(~cap)
     assert all(r["peak_p_fwer"] == "nan" for r, c in zip(rows, cap) if c)
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--permutations", "200", "--measure", "rotation", "--aha",
+                 "--permutations", "200", "--no-figures", "--measure", "rotation", "--aha",
                  str(tmp_path / "aha.json"), "-o", str(tmp_path / "rotation")]) == 0  # fmt: skip
     near = np.linalg.norm(np.cross(atlas - lm.apex, lm.long_axis), axis=1) < 5.0
     assert "peak rotation " in capsys.readouterr().out
@@ -388,10 +388,11 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
                  "--measure", "rotation"]) == 2  # fmt: skip
     assert "--measure rotation: needs --aha" in capsys.readouterr().err
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
-                 "--aha", str(tmp_path / "aha.json")]) == 2  # fmt: skip
-    assert "--aha: only used with --exclude-segments or --measure rotation" in (
-        capsys.readouterr().err
-    )
+                 "--aha", str(tmp_path / "aha.json"), "--permutations", "50", "--no-figures",
+                 "-o", str(tmp_path / "segments")]) == 0  # fmt: skip
+    segments = list(csv.DictReader(open(tmp_path / "segments" / "cycle_segments.csv")))
+    assert {r["summary"] for r in segments} == {"per_frame", "peak", "time_to_peak", "trajectory"}
+    assert len(segments) == 4 * 17 and all(0 < float(r["p_fwer"]) <= 1 for r in segments)
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "groups.csv"),
                  "--exclude-segments", "17"]) == 2  # fmt: skip
     assert "--exclude-segments: needs --aha" in capsys.readouterr().err
@@ -401,11 +402,17 @@ def test_cli_from_tracked_meshes_to_the_cycle_tests(tmp_path, cycles, capsys):
     assert (study / "analysis" / "cycle_tests.vtu").is_file()
     (tmp_path / "bad.csv").write_text("subject,group\n" + f"{cycles.names[0]},a\n")
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "bad.csv")]) == 2
-    assert "no group for" in capsys.readouterr().err
+    assert "expected two groups, the table has 1" in capsys.readouterr().err
     (tmp_path / "small.csv").write_text("subject,group\n" + "".join(
         f"{n},{'a' if i < 2 else 'b'}\n" for i, n in enumerate(cycles.names)))  # fmt: skip
     assert main(["cycle-analyze", str(study), "--groups", str(tmp_path / "small.csv")]) == 2
     assert "at least 3 subjects" in capsys.readouterr().err
+
+
+def _column(path, name) -> np.ndarray:
+    """A column of a CSV table as floats."""
+    with open(path) as fh:
+        return np.array([float(r[name]) for r in csv.DictReader(fh)])
 
 
 def test_the_ideal_cycle_transport_is_the_ideal_transport_at_end_systole(cycles):

@@ -12,7 +12,7 @@ from ladders.study.imaging.plane_table import check_plane_table, planes_by_image
 from ladders.study.imaging.series_frames import read_frames_table
 from ladders.study.imaging.voxelize import write_label_image
 from ladders.study.population.analysis import check_groups_table
-from ladders.study.population.model_analysis import check_design_table
+from ladders.study.population.model_design import check_design_table
 from ladders.study.preparation.landmarks import LandmarkError, read_landmarks
 from ladders.tables import Column, TableError, read_table
 

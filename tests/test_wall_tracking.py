@@ -315,7 +315,7 @@ def test_cycle_analyze_tests_a_wall_measure_of_the_wall_maps(tmp_path):
                                      "thickening", "--permutations", 200)  # fmt: skip
     assert status == 0, stderr
     table = (tmp_path / "wall" / "analysis" / "cycle_vertices.csv").read_text().splitlines()
-    assert table[0].startswith("vertex,peak_group1_mm,peak_group2_mm")
+    assert table[0].startswith("contrast,vertex,peak_group1_mm,peak_group2_mm")
     status, _, stderr = run_cli("cycle-analyze", tmp_path / "wall", "--groups", groups,
                                 "--measure", "normal")  # fmt: skip
     assert status == 2 and "cycle_study.json" in stderr

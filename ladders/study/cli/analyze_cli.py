@@ -8,7 +8,6 @@ maps on the atlas for ParaView, figures).
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 from .cli_types import (
@@ -16,27 +15,19 @@ from .cli_types import (
     UsageError,
     existing_file,
     existing_folder,
-    positive_float,
     positive_int,
 )
 from .common_arguments import (
     RECOMMENDED_ALPHA2,
     add_alpha2,
-    add_compare,
     add_no_progress,
     add_output,
     add_permutations,
     add_seed,
 )
+from .model_arguments import add_model_arguments, model_request, print_outcome
 
 __all__ = ["add_analyze_parser", "run_analyze_command"]
-
-
-def _columns(text: str) -> tuple[str, str]:
-    names = tuple(t.strip() for t in text.split(","))
-    if len(names) != 2 or not all(names):
-        raise argparse.ArgumentTypeError(f"expected two column names as TIME,EVENT, got {text!r}")
-    return names
 
 
 def add_analyze_parser(sub) -> None:
@@ -62,35 +53,11 @@ def add_analyze_parser(sub) -> None:
                    help="folder written by 'symladders study'")  # fmt: skip
     p.add_argument("--groups", type=existing_file, default=None,
                    help="CSV table with the columns subject and group")  # fmt: skip
-    p.add_argument("--design", type=existing_file, default=None,
-                   help="CSV design table: a column subject and any covariates (a linear model "
-                        "per vertex instead of two groups; with --model and --contrast)")  # fmt: skip
-    p.add_argument("--model", default=None, metavar="FORMULA",
-                   help="model formula on the design's columns, e.g. 'group + age + sex'")  # fmt: skip
-    p.add_argument("--contrast", nargs="+", default=None, metavar="SPEC",
-                   help="contrasts to test, e.g. 'group[patients] - group[controls]', 'age', "
-                        "or 'group' (F test over its levels)")  # fmt: skip
-    p.add_argument("--blocks", default=None, metavar="COLUMN",
-                   help="a design column of exchangeability blocks (e.g. site): permutations "
-                        "within blocks")  # fmt: skip
-    p.add_argument("--outcome", type=_columns, default=None, metavar="TIME,EVENT",
-                   help="design columns of a survival outcome (follow-up time, event 1 or "
-                        "censored 0): Cox regression on the motion's PCA scores, cross-validated "
-                        "C-index per motion")  # fmt: skip
-    p.add_argument("--baseline", nargs="+", default=None, metavar="COLUMN",
-                   help="with --outcome: clinical design columns predicted alone for comparison "
-                        "(e.g. ejection_fraction)")  # fmt: skip
-    p.add_argument("--tfce", action="store_true",
-                   help="also threshold-free cluster enhancement (H = 2, E = 1) on the atlas's "
-                        "triangles, with its own family-wise p-values")  # fmt: skip
-    p.add_argument("--aha", type=existing_file, default=None, metavar="LANDMARKS",
-                   help="the atlas's apex, base-plane centre and septal point (a JSON file, or a "
-                        "landmark table's row 'atlas'): tables and bull's-eyes per AHA segment")  # fmt: skip
-    p.add_argument("--fwhm", type=positive_float, default=None, metavar="MM",
-                   help="with the linear model (--design, --tfce or --aha): smooth every "
-                        "subject's maps on the atlas before the tests, by the heat kernel of "
-                        "this full width at half maximum (mm)")  # fmt: skip
-    add_compare(p)
+    add_model_arguments(
+        p,
+        "tables and bull's-eyes per AHA segment",
+        fwhm_when="with the linear model (--design, --tfce or --aha): ",
+    )
     p.add_argument("--truth", type=existing_file, default=None,
                    help="planted_region.json of a synthetic cohort ('symladders cohort')")  # fmt: skip
     p.add_argument("--null", type=existing_folder, default=None, metavar="NULL_STUDY",
@@ -107,7 +74,6 @@ def add_analyze_parser(sub) -> None:
     p.add_argument("--normalize", choices=("none", "volume"), default="none",
                    help="amplitude normalisation of the transported motion: 'volume' keeps "
                         "each subject's relative volume change (ejection fraction)")  # fmt: skip
-    p.add_argument("--alpha", type=positive_float, default=0.05, help="family-wise error level")
     p.add_argument("--null-repetitions", type=positive_int, default=200,
                    help="random splits of the null study")  # fmt: skip
     add_seed(p)
@@ -123,16 +89,11 @@ def run_analyze_command(args) -> int:
     from ..errors import CohortError
     from ..population import analyze, read_planted_region
 
-    if (args.groups is None) == (args.design is None):
-        raise UsageError("symladders analyze: error: give --groups or --design (one of them)")
-    if args.design is not None:
-        return _run_model(args)
+    request = model_request(args, "analyze")
+    if not request.groups:
+        return _run_model(args, request)
     if args.null is not None and args.truth is None:
         raise UsageError("symladders analyze: error: --null needs --truth (the planted region)")
-    if not args.alpha < 1:
-        raise UsageError(
-            f"symladders analyze: error: --alpha: expected a level in (0, 1), got {args.alpha}"
-        )
     try:
         groups = read_groups(args.groups)
         region = None if args.truth is None else read_planted_region(args.truth)
@@ -163,10 +124,7 @@ def run_analyze_command(args) -> int:
     )
     folder = Path(outcome.paths["summary.md"]).parent
     if args.tfce or args.aha is not None or args.fwhm is not None:
-        args.design_table = {"subject": list(groups), "group": list(groups.values())}
-        args.model = "group"
-        args.contrast = [f"group[{c.groups[0]}] - group[{c.groups[1]}]"]
-        _run_model(args)
+        _run_model(args, request)
     print(
         f"Tables, maps and figures in {folder}: "
         + ", ".join(Path(p).name for p in outcome.paths.values())
@@ -174,49 +132,31 @@ def run_analyze_command(args) -> int:
     return 0
 
 
-def _run_model(args) -> int:
+def _run_model(args, request) -> int:
     """The linear-model analysis (``--design``, or the groups with ``--tfce`` / ``--aha`` /
     ``--fwhm``)."""
-    from ladders.statistics import read_design
-
     from ..errors import CohortError
     from ..population import analyze_model, read_aha_landmarks
 
     if args.outcome is not None:
-        if args.design is None:
-            raise UsageError("symladders analyze: error: --outcome needs --design")
-        _run_outcome(args)
-        if args.model is None and not args.contrast:
+        _run_outcome(args, request)
+        if request.formula is None:
             return 0
-    if args.model is None or not args.contrast:
-        raise UsageError(
-            "symladders analyze: error: --design needs --model and --contrast (or --outcome)"
-        )
-    if not args.alpha < 1:
-        raise UsageError(
-            f"symladders analyze: error: --alpha: expected a level in (0, 1), got {args.alpha}"
-        )
     try:
-        table = getattr(args, "design_table", None)
-        if table is None:
-            table = read_design(args.design)
-        if args.groups is not None and args.compare is not None:  # the two groups compared
-            keep = [g in args.compare for g in table["group"]]
-            table = {k: [v for v, y in zip(col, keep) if y] for k, col in table.items()}
         landmarks = None if args.aha is None else read_aha_landmarks(args.aha)
         outcome = analyze_model(
-            args.study, table, args.model, args.contrast, args.output, alpha2=args.alpha2,
-            methods=args.transport, n_permutations=args.permutations, tfce=args.tfce,
-            aha_landmarks=landmarks, blocks=args.blocks,
+            args.study, request.table, request.formula, request.contrasts, args.output,
+            alpha2=args.alpha2, methods=args.transport, n_permutations=args.permutations,
+            tfce=args.tfce, aha_landmarks=landmarks, blocks=args.blocks,
             normalize=None if args.normalize == "none" else args.normalize, alpha=args.alpha,
             seed=args.seed, progress=not args.no_progress, figures=not args.no_figures,
-            fwhm=args.fwhm,
+            fwhm=args.fwhm, source=request.source,
         )  # fmt: skip
     except (CohortError, ValueError) as exc:
         raise UsageError(f"symladders analyze: error: {exc}") from None
     k = outcome.comparisons[0].motion.atlas.shape[0]
     n = len(outcome.comparisons[0].design.subjects)
-    print(f"symladders analyze: model '{args.model}', {n} subjects, "
+    print(f"symladders analyze: model '{request.formula}', {n} subjects, "
           f"{len(outcome.comparisons)} motion(s) x contrast(s), {k} atlas vertices"
           + ("" if args.fwhm is None else f", maps smoothed {args.fwhm:g} mm FWHM"))  # fmt: skip
     if outcome.left_out:
@@ -236,24 +176,17 @@ def _run_model(args) -> int:
     return 0
 
 
-def _run_outcome(args) -> None:
+def _run_outcome(args, request) -> None:
     """Survival predicted from every motion (``--outcome TIME,EVENT``)."""
-    from ladders.statistics import read_design
-
     from ..errors import CohortError
     from ..population import analyze_outcome
 
     try:
         outcome = analyze_outcome(
-            args.study, read_design(args.design), *args.outcome, args.output,
+            args.study, request.table, *args.outcome, args.output,
             baseline=args.baseline, alpha2=args.alpha2, methods=args.transport,
-            n_components=args.components, seed=args.seed,
+            n_components=args.components, seed=args.seed, source=request.source,
         )  # fmt: skip
     except (CohortError, ValueError) as exc:
         raise UsageError(f"symladders analyze: error: {exc}") from None
-    for m, r in outcome.results:
-        base = ("" if r.baseline_c_index is None else
-                f"; {', '.join(args.baseline)} alone {r.baseline_c_index:.2f}")  # fmt: skip
-        print(f"{m.label}: C-index {r.c_index:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}]{base}")
-    print(f"Outcome tables in {Path(outcome.paths['outcome.csv']).parent}: outcome.csv, "
-          "outcome_summary.md")  # fmt: skip
+    print_outcome(outcome, args.baseline)

@@ -21,6 +21,7 @@ import argparse
 from .cli_types import DefaultsFormatter, UsageError, positive_int
 from .cohort_cycle_cli import ED_ES_DEFAULTS, add_cycle_arguments, run_cycle_cohort
 from .common_arguments import MESH_FORMATS, add_no_progress, add_output, add_seed
+from .covariate_arguments import covariate_data, print_covariate_cohort, several_groups
 
 __all__ = ["add_cohort_parser", "run_cohort_command"]
 
@@ -137,7 +138,8 @@ def add_cohort_parser(sub) -> None:
         type=_nonnegative,
         default=None,
         help="size of the abnormality: the fraction of the motion removed (0-1) for "
-        "hypokinesia/radial/longitudinal, degrees of rotation for twist (default "
+        "hypokinesia/radial/longitudinal, degrees of rotation for twist, the delay of the "
+        "end-systole as a fraction of the cycle for delay (default "
         + ", ".join(f"{k} {v:g}" for k, v in DEFAULT_MAGNITUDE.items())
         + ")",
     )
@@ -180,6 +182,11 @@ def add_cohort_parser(sub) -> None:
                    help="relative reduction of the males' contraction (default 0)")  # fmt: skip
     g.add_argument("--body-size-sd", type=_nonnegative, default=None,
                    help="SD of the body size, a length factor of mean 1 (default 0.08)")  # fmt: skip
+    g.add_argument("--outcome-effect", type=_nonnegative, default=None, metavar="BETA",
+                   help="also a survival outcome (design.csv columns time and event, 30 %% "
+                        "censored): log hazard ratio BETA per SD of each subject's normal "
+                        "motion ED-ES over the planted region (a weaker contraction, a higher "
+                        "hazard); default: none")  # fmt: skip
     g.add_argument("--design", action="store_true",
                    help="write design.csv with the default covariates even without the options above")  # fmt: skip
     p.add_argument("--vertices", type=positive_int, default=1009, help="vertices per mesh")
@@ -190,75 +197,6 @@ def add_cohort_parser(sub) -> None:
                    help="mesh format")  # fmt: skip
     add_cycle_arguments(p)
     p.set_defaults(run=run_cohort_command, output_is_file=False)
-
-
-_COVARIATE_OPTIONS = ("imbalance", "age_effect", "sex_effect", "body_size_sd")
-
-
-def _several_groups(args) -> bool:
-    return bool(args.group or args.anatomy or args.design) or any(
-        getattr(args, k) is not None for k in _COVARIATE_OPTIONS
-    )
-
-
-def _run_covariate_cohort(args, abnormality) -> int:
-    """The cohort in several groups with covariates (``make_covariate_cohort``)."""
-    from pathlib import Path
-
-    from ..cohort.planted_effect import MotionAbnormality
-    from ..errors import CohortError
-    from ..population import (
-        AnatomyShift,
-        CohortGroup,
-        Covariates,
-        make_covariate_cohort,
-        write_covariate_cohort,
-    )
-
-    try:
-        if args.group:
-            specs = [(name, None if kind is None else MotionAbnormality(
-                kind, segments or (7, 8, 13, 14), magnitude)) for name, kind, segments, magnitude
-                in args.group]  # fmt: skip
-        else:
-            specs = [("controls", None), ("patients", abnormality)]
-        names = [name for name, _ in specs]
-        shifts = {}
-        for name, fields in args.anatomy or []:
-            if name not in names:
-                raise CohortError(f"--anatomy {name}: no such group (groups: {', '.join(names)})")
-            shifts[name] = AnatomyShift(**fields)
-        groups = [CohortGroup(name, effect, shifts.get(name)) for name, effect in specs]
-        options = {k: getattr(args, k) for k in _COVARIATE_OPTIONS if getattr(args, k) is not None}
-        covariates = Covariates(**options)
-        n = len(groups)
-        sizes = [args.subjects // n + (i < args.subjects % n) for i in range(n)]
-        data = make_covariate_cohort(sizes, groups, covariates, args.seed, args.vertices,
-                                     args.noise, args.noise_length)  # fmt: skip
-    except CohortError as exc:
-        raise UsageError(f"symladders cohort: error: {exc}") from None
-    if args.images == "labels":
-        folder = _write_images(data, args)
-    else:
-        folder = write_covariate_cohort(
-            data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
-            pose=args.pose, landmarks=args.landmarks,
-        )  # fmt: skip
-    counts = ", ".join(f"{g.name} {sum(v == g.name for v in data.groups.values())}" for g in groups)
-    print(f"symladders cohort: {len(data.cohort)} subjects ({counts}), "
-          f"{data.cohort.n_vertices} vertices, in {folder}")  # fmt: skip
-    for g in groups:
-        region = data.regions[g.name]
-        planted = [] if g.abnormality is None else [
-            f"{g.abnormality.describe()} ({int(region.affected.sum())} atlas vertices)"]  # fmt: skip
-        planted += [] if g.anatomy is None else [f"anatomy {g.anatomy}"]
-        print(f"  {g.name}: {'; '.join(planted) or 'no planted effect'}")
-    if args.images == "labels":
-        _print_images(folder)
-    else:
-        print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
-              f"truth: {folder / 'planted_region.json'}")  # fmt: skip
-    return 0
 
 
 def _check_image_options(args) -> None:
@@ -294,7 +232,7 @@ def run_cohort_command(args) -> int:
 
     from ..cohort.planted_effect import MotionAbnormality
     from ..errors import CohortError
-    from ..population import make_two_group_cohort, write_two_group_cohort
+    from ..population import make_two_group_cohort, write_covariate_cohort, write_two_group_cohort
 
     try:
         abnormality = (
@@ -310,8 +248,22 @@ def run_cohort_command(args) -> int:
         raise UsageError("symladders cohort: error: --images cine and --tagging: only with --cycle")
     if args.images == "labels":
         _check_image_options(args)
-    if _several_groups(args):
-        return _run_covariate_cohort(args, abnormality)
+    if several_groups(args):
+        data, groups = covariate_data(args, abnormality)
+        if args.images == "labels":
+            folder = _write_images(data, args)
+        else:
+            folder = write_covariate_cohort(
+                data, Path(args.output), ext=args.ext, remesh_factor=args.remesh or None,
+                pose=args.pose, landmarks=args.landmarks,
+            )  # fmt: skip
+        print_covariate_cohort(data, groups, folder, f"{data.cohort.n_vertices} vertices")
+        if args.images == "labels":
+            _print_images(folder)
+        else:
+            print(f"groups: {folder / 'groups.csv'}; design: {folder / 'design.csv'}; "
+                  f"truth: {folder / 'planted_region.json'}")  # fmt: skip
+        return 0
     data = make_two_group_cohort(
         args.subjects, args.patients, abnormality, args.vertices, args.seed, args.noise,
         args.noise_length,

@@ -1,9 +1,11 @@
-"""``symladders cohort --cycle N``: the two-group cohort through the whole cycle, as images.
+"""``symladders cohort --cycle N``: the cohort through the whole cycle, as images.
 
-A thin wrapper of :func:`~ladders.study.population.make_two_group_cycles` and
-:func:`~ladders.study.population.write_cycle_cohort`: besides the ED/ES meshes,
-``groups.csv`` and ``planted_region.json`` of ``symladders cohort``, every subject's
-4-D label (or cine) series in ``images/`` and its true frames in ``frames/``. With
+A thin wrapper of :func:`~ladders.study.population.make_two_group_cycles` (or, with
+several groups and covariates, :func:`~ladders.study.population.covariate_cycles` of the
+cohort of :mod:`.covariate_arguments`) and :func:`~ladders.study.population.write_cycle_cohort`:
+besides the ED/ES meshes, ``groups.csv``, ``planted_region.json`` (and ``design.csv``)
+of ``symladders cohort``, every subject's 4-D label (or cine) series in ``images/`` and
+its true frames in ``frames/``. With
 ``--landmarks``, ``landmarks.csv`` too: every subject's apex, base-plane centre and septal
 point at ED (the cohort is not posed: the coordinates of its meshes and of its images'
 world frame), for ``symladders correspond --landmarks``.
@@ -14,12 +16,15 @@ from __future__ import annotations
 import argparse
 
 from .cli_types import UsageError
+from .covariate_arguments import covariate_data, print_covariate_cohort, several_groups
 
 __all__ = ["add_cycle_arguments", "run_cycle_cohort"]
 
 #: Options of the ED/ES cohort that the whole-cycle cohort does not take.
-_EXCLUSIVE = ("noise", "remesh", "pose", "group", "anatomy", "imbalance", "age_effect",
-              "sex_effect", "body_size_sd")  # fmt: skip
+_EXCLUSIVE = ("noise", "remesh", "pose")
+#: The ring transitions of the cycle's abnormalities (half-width, fraction of the long axis):
+#: wide enough for every subject's motion to stay invertible (:data:`CYCLE_ABNORMALITY`).
+_TRANSITION = 0.1
 #: Defaults of options of the ED-ES cohort (its parser's), refused with --cycle when changed.
 ED_ES_DEFAULTS = {"noise_length": 10.0, "ext": "vtk"}
 
@@ -86,33 +91,42 @@ def run_cycle_cohort(args, abnormality) -> int:
     from pathlib import Path
 
     from ..errors import CohortError
-    from ..population import make_two_group_cycles, write_cycle_cohort
+    from ..population import covariate_cycles, make_two_group_cycles, write_cycle_cohort
 
     given = [o for o in _EXCLUSIVE if getattr(args, o, None) not in (None, False, 0.0)]
     given += [o for o, default in ED_ES_DEFAULTS.items() if getattr(args, o, default) != default]
-    if given or args.design:
-        flag = "--" + (given[0] if given else "design")
-        raise UsageError(f"symladders cohort: error: {flag.replace('_', '-')}: not with --cycle")
+    if given:
+        raise UsageError(f"symladders cohort: error: --{given[0].replace('_', '-')}: not with "
+                         "--cycle")  # fmt: skip
     args.images = args.images or "labels"
     args.voxel = args.voxel or (1.5, 8.0)
     if args.tagging and args.images != "cine":
         raise UsageError("symladders cohort: error: --tagging: only with --images cine")
     if abnormality is not None:  # transitions wide enough for the motion to stay invertible
-        abnormality = replace(abnormality, transition_height=0.1)
+        abnormality = replace(abnormality, transition_height=_TRANSITION)
+    data, groups = None, None
+    if several_groups(args):
+        data, groups = covariate_data(args, abnormality, transition_height=_TRANSITION)
     try:
-        cycles = make_two_group_cycles(args.subjects, abnormality, args.cycle, 0.35,
-                                       args.vertices, args.seed, args.patients)  # fmt: skip
+        if data is None:
+            cycles = make_two_group_cycles(args.subjects, abnormality, args.cycle, 0.35,
+                                           args.vertices, args.seed, args.patients)  # fmt: skip
+        else:
+            cycles = covariate_cycles(data, args.cycle, 0.35)
         folder = write_cycle_cohort(cycles, Path(args.output), args.images, *args.voxel,
                                     tagging=_tag_grid(args.tagging),
                                     landmarks=args.landmarks,
                                     progress=not args.no_progress)  # fmt: skip
     except CohortError as exc:
         raise UsageError(f"symladders cohort: error: {exc}") from None
-    n_patients = int(cycles.patients.sum())
-    print(f"symladders cohort: {len(cycles.names)} subjects ({n_patients} patients, "
-          f"{len(cycles.names) - n_patients} controls) through {args.cycle} frames, "
-          f"{cycles.frames.shape[2]} vertices, in {folder}")  # fmt: skip
-    if abnormality is not None:
+    size = f"through {args.cycle} frames, {cycles.frames.shape[2]} vertices"
+    if data is not None:
+        print_covariate_cohort(data, groups, folder, size)
+    else:
+        n_patients = int(cycles.patients.sum())
+        print(f"symladders cohort: {len(cycles.names)} subjects ({n_patients} patients, "
+              f"{len(cycles.names) - n_patients} controls) {size}, in {folder}")  # fmt: skip
+    if data is None and abnormality is not None:
         region = cycles.data.region
         print(f"planted: {abnormality.describe()}; {int(region.affected.sum())} of "
               f"{region.weight.size} atlas vertices affected")  # fmt: skip
@@ -120,6 +134,7 @@ def run_cycle_cohort(args, abnormality) -> int:
     if args.landmarks:
         what += f"; landmarks: {folder / 'landmarks.csv'}"
     what += f"; valve planes: {folder / 'valve_planes.csv'}"
+    what += "" if data is None else f"; design: {folder / 'design.csv'}"
     print(f"{what}; true frames: {folder / 'frames'}; groups: {folder / 'groups.csv'}; "
           f"truth: {folder / 'planted_region.json'}, {folder / 'cycle.json'}")  # fmt: skip
     return 0

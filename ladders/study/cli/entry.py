@@ -29,7 +29,8 @@ from .cli_types import (
 )
 from .cohort_cli import add_cohort_parser
 from .correspond_cli import add_correspond_parser
-from .cycle_cli import add_cycle_parsers
+from .cycle_analyze_cli import add_cycle_analyze_parser
+from .cycle_cli import add_cycle_study_parser
 from .mesh_cli import add_mesh_parser
 from .plugin_arguments import preload_plugins
 from .run_cli import add_run_parser
@@ -57,7 +58,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_analyze_parser(sub)
     add_validate_parser(sub)
     add_track_parser(sub)
-    add_cycle_parsers(sub)
+    add_cycle_study_parser(sub)
+    add_cycle_analyze_parser(sub)
     add_wall_parser(sub)
     return parser
 

@@ -24,16 +24,19 @@ as it shortens). See ``docs/evidence/synthetic_cohort.md`` ("The whole cycle").
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
 
 from ..errors import CohortError
-from .planted_effect import MotionAbnormality, planted_modulation
+from .planted_effect import SCALED, MotionAbnormality, frame_abnormality, planted_modulation
 from .synthetic_lv import SubjectParameters, lv_shapes
+from .time_course import check_n_frames, cycle_fraction, frame_times, number
 
 __all__ = [
     "cycle_fraction",
+    "frame_abnormality",
     "frame_times",
     "motion_forward",
     "motion_inverse",
@@ -48,25 +51,8 @@ _ON_SURFACE = 1e-13  # rho^2 - rho_e^2 below this (relative) is on the endocardi
 _SLOPE_STEP = 1e-4  # central differences of the modulation, in u and in radians
 
 
-def _number(value, name: str, accept, what: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = np.nan
-    if isinstance(value, bool) or not (np.isfinite(x) and accept(x)):
-        raise CohortError(f"{name}: expected {what}, got {value!r}")
-    return x
-
-
 def _check_f(f) -> float:
-    return _number(f, "f", lambda x: 0 <= x <= 1, "a fraction of the end-systolic motion in [0, 1]")
-
-
-def _check_n_frames(n_frames) -> int:
-    ok = isinstance(n_frames, (int, np.integer)) and not isinstance(n_frames, bool)
-    if not ok or n_frames < 2:
-        raise CohortError(f"n_frames: expected an integer >= 2, got {n_frames!r}")
-    return int(n_frames)
+    return number(f, "f", lambda x: 0 <= x <= 1, "a fraction of the end-systolic motion in [0, 1]")
 
 
 def _check_inputs(params, abnormality) -> None:
@@ -78,6 +64,11 @@ def _check_inputs(params, abnormality) -> None:
         raise CohortError(
             f"abnormality: expected a MotionAbnormality or None, got {type(abnormality).__name__}"
         )
+    if abnormality is not None and abnormality.kind == "delay":
+        raise CohortError(
+            "abnormality: a delay depends on the time of the cycle, not on the fraction f of "
+            "the motion: give frame_abnormality(abnormality, t, es_phase)"
+        )
 
 
 def _check_points(points) -> np.ndarray:
@@ -88,38 +79,6 @@ def _check_points(points) -> np.ndarray:
     if x.ndim < 1 or x.shape[-1] != 3 or not np.isfinite(x).all():
         raise CohortError(f"points: expected finite coordinates of shape (..., 3), got {x.shape}")
     return x
-
-
-def frame_times(n_frames: int) -> np.ndarray:
-    """Times of the frames of a cycle, ``t_k = k / n_frames``, shape ``(n_frames,)``."""
-    n = _check_n_frames(n_frames)
-    return np.arange(n) / n
-
-
-def cycle_fraction(t, es_phase: float = 0.35):
-    """Fraction of the end-systolic motion reached at time ``t`` of the cycle.
-
-    Raised-cosine contraction from ED to ES, then raised-cosine relaxation back to ED::
-
-        f(t) = (1 - cos(pi t / t_es)) / 2                      0 <= t <= t_es
-        f(t) = (1 + cos(pi (t - t_es) / (1 - t_es))) / 2       t_es < t <= 1
-
-    ``f`` is continuously differentiable and periodic (``f' = 0`` at ED and at ES). ``t``
-    (float or array) is a fraction of the cycle in ``[0, 1]`` (frame ``k`` of ``n`` is at
-    ``k / n``), ``es_phase`` the time of end-systole in ``(0, 1)``; returns ``f(t)`` in
-    ``[0, 1]``, the shape of ``t``.
-    """
-    es = _number(es_phase, "es_phase", lambda x: 0 < x < 1, "a fraction of the cycle in (0, 1)")
-    try:
-        tt = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise CohortError(f"t: expected times in [0, 1], got {t!r}") from None
-    if not np.isfinite(tt).all() or np.any(tt < 0.0) or np.any(tt > 1.0):
-        raise CohortError(f"t: expected times in [0, 1] (fractions of the cycle), got {t!r}")
-    contraction = 0.5 * (1.0 - np.cos(np.pi * tt / es))
-    relaxation = 0.5 * (1.0 + np.cos(np.pi * (tt - es) / (1.0 - es)))
-    out = np.where(tt <= es, contraction, relaxation)
-    return float(out) if out.ndim == 0 else out
 
 
 def _fields(params: SubjectParameters, u, phi, abnormality):
@@ -135,6 +94,8 @@ def _fields(params: SubjectParameters, u, phi, abnormality):
         modulation = planted_modulation(abnormality, np.arccos(1.0 - u), phi)
         r = r * modulation.radial
         shortening = shortening * modulation.longitudinal
+        if modulation.rotation is not None:
+            psi_deg = psi_deg * modulation.rotation
         psi_deg = psi_deg + modulation.twist
     return r, shortening, np.deg2rad(psi_deg)
 
@@ -154,26 +115,32 @@ def _coupled(abnormality) -> bool:
 
 
 def _slopes(abnormality: MotionAbnormality, u, phi):
-    """Derivatives in ``u`` and ``phi`` of the modulation's longitudinal factor and twist (deg)."""
+    """The modulation's rotation factor, and the derivatives in ``u`` and ``phi`` of its
+    longitudinal factor, twist (deg) and rotation factor."""
 
     def mod(uu, pp):
         m = planted_modulation(abnormality, np.arccos(1.0 - uu), pp)
-        return m.longitudinal, m.twist
+        rotation = np.ones_like(m.twist) if m.rotation is None else m.rotation
+        return m.longitudinal, m.twist, rotation
 
     e = _SLOPE_STEP
     up, um = np.minimum(u + e, 1.0), np.maximum(u - e, 0.0)
-    (lo_p, tw_p), (lo_m, tw_m) = mod(up, phi), mod(um, phi)
-    (lo_q, tw_q), (lo_n, tw_n) = mod(u, phi + e), mod(u, phi - e)
-    du = up - um
-    return (lo_p - lo_m) / du, (lo_q - lo_n) / (2 * e), (tw_p - tw_m) / du, (tw_q - tw_n) / (2 * e)
+    (lo_p, tw_p, ro_p), (lo_m, tw_m, ro_m) = mod(up, phi), mod(um, phi)
+    (lo_q, tw_q, ro_q), (lo_n, tw_n, ro_n) = mod(u, phi + e), mod(u, phi - e)
+    du, dphi = up - um, 2 * e
+    rotation = mod(u, phi)[2]
+    return ((lo_p - lo_m) / du, (lo_q - lo_n) / dphi, (tw_p - tw_m) / du, (tw_q - tw_n) / dphi,
+            rotation, (ro_p - ro_m) / du, (ro_q - ro_n) / dphi)  # fmt: skip
 
 
 def _jacobian(params, f, s, chi, shortening, slopes):
     """``J = det d(z'/c, phi')/d(z/c, phi)`` and ``d phi'/d phi`` (``chi``: u is not clipped)."""
-    lon_u, lon_phi, tw_u, tw_phi = slopes
-    l0 = params.longitudinal_shortening
-    psi_u = np.deg2rad(tw_u - params.apex_rotation - params.base_rotation)
-    turn = 1.0 + f * np.deg2rad(tw_phi)
+    lon_u, lon_phi, tw_u, tw_phi, rot, rot_u, rot_phi = slopes
+    l0, a, b = params.longitudinal_shortening, params.apex_rotation, params.base_rotation
+    u = np.clip(s, 0.0, 1.0)
+    psi0 = a * (1.0 - u) - b * u  # degrees, before the modulation's factor
+    psi_u = np.deg2rad(tw_u + rot_u * psi0 - rot * (a + b))
+    turn = 1.0 + f * np.deg2rad(tw_phi + rot_phi * psi0)
     stretch = 1.0 - f * shortening - f * s * l0 * lon_u * chi
     return stretch * turn + f * f * s * l0 * lon_phi * psi_u * chi, turn
 
@@ -186,9 +153,16 @@ def _area_factor(params, s, phi, f, shortening, abnormality):
     return _jacobian(params, f, s, (s > 0.0) & (s < 1.0), shortening, slopes)[0]
 
 
-@lru_cache(maxsize=16)
+@lru_cache(maxsize=64)
 def _modulation_grid(abnormality: MotionAbnormality):
     """The modulation's longitudinal factor and its and the twist's slopes on a fine grid."""
+    if abnormality.kind == SCALED and abnormality.magnitude != 1.0:
+        # linear in the magnitude: the grid of the unit scaling, rescaled (a delay's frames)
+        u, phi, unit, slopes = _modulation_grid(replace(abnormality, magnitude=1.0))
+        m = abnormality.magnitude
+        lon = 1.0 - m * (1.0 - unit)
+        lon_u, lon_phi, tw_u, tw_phi, _, rot_u, rot_phi = slopes
+        return u, phi, lon, (m * lon_u, m * lon_phi, tw_u, tw_phi, lon, m * rot_u, m * rot_phi)
     h, a = abnormality.transition_height, abnormality.transition_angle
     n_u = int(min(4001, max(201, np.ceil(8.0 / h) + 1)))
     n_phi = int(min(7200, max(360, np.ceil(8.0 * 360.0 / a))))
@@ -218,7 +192,10 @@ def check_invertible(
     _check_inputs(params, abnormality)
     f = _check_f(f)
     p = params
-    r_max = max(
+    gain = 1.0  # the largest factor of the motion a modulation applies (a scaling above 1)
+    if abnormality is not None and abnormality.kind == SCALED:
+        gain = max(1.0, 1.0 - abnormality.magnitude)
+    r_max = gain * max(
         p.radial_contraction * (1.0 + s1 * abs(p.contraction_heterogeneity))
         * (1.0 + s2 * abs(p.contraction_gradient))
         for s1 in (-1, 1) for s2 in (-1, 1)
@@ -228,12 +205,12 @@ def check_invertible(
             f"params: the radial contraction reaches r = {r_max:.3g} at f = {f:g}: the radial "
             "map rho -> (1 - f r) rho is not invertible (1 - f r <= 0)"
         )
-    if f * p.longitudinal_shortening >= 1.0:
+    if f * gain * p.longitudinal_shortening >= 1.0:
         raise CohortError(
-            f"params: longitudinal_shortening {p.longitudinal_shortening:g} at f = {f:g} "
+            f"params: longitudinal_shortening {gain * p.longitudinal_shortening:g} at f = {f:g} "
             "collapses the long axis (1 - f l <= 0): the motion is not invertible"
         )
-    margin = min(1.0 - f * max(r_max, 0.0), 1.0 - f * max(p.longitudinal_shortening, 0.0))
+    margin = min(1.0 - f * max(r_max, 0.0), 1.0 - f * gain * max(p.longitudinal_shortening, 0.0))
     if not _coupled(abnormality) or f == 0.0:
         return margin
     if abnormality.transition_height == 0.0 or abnormality.transition_angle == 0.0:
@@ -387,18 +364,21 @@ def cycle_frames(
     """The subject's surface at every frame of the cycle, in vertex correspondence.
 
     Frame ``k`` is the ED surface of :func:`lv_shapes` moved by :func:`motion_forward`
-    at ``f = cycle_fraction(k / n_frames, es_phase)``: frame 0 is the ED surface, and
-    the ES surface is frame ``es_phase * n_frames`` when that is an integer.
+    at ``f = cycle_fraction(k / n_frames, es_phase)`` with the abnormality acting at
+    that time (:func:`frame_abnormality`): frame 0 is the ED surface, and the ES surface
+    is frame ``es_phase * n_frames`` when that is an integer.
 
     ``theta, phi`` (shape ``(k,)``) are parametric coordinates (:func:`lv_grid`); returns
     an array ``(n_frames, k, 3)``.
     """
-    n = _check_n_frames(n_frames)
-    fractions = cycle_fraction(frame_times(n), es_phase)
+    n = check_n_frames(n_frames)
+    times = frame_times(n)
+    fractions = cycle_fraction(times, es_phase)
     theta, phi = np.asarray(theta, dtype=float), np.asarray(phi, dtype=float)
     if theta.ndim != 1 or theta.shape != phi.shape:
         raise CohortError(
             f"theta, phi: expected two arrays of shape (k,), got {theta.shape}, {phi.shape}"
         )
     ed, _ = lv_shapes(params, theta, phi)
-    return np.stack([motion_forward(params, ed, f, abnormality) for f in fractions])
+    return np.stack([motion_forward(params, ed, f, frame_abnormality(abnormality, t, es_phase))
+                     for t, f in zip(times, fractions)])  # fmt: skip

@@ -200,8 +200,8 @@ class MotionModulation:
 
     Each array has one value per vertex of the grid, shape ``(k,)``. The
     end-systolic motion of :func:`lv_shapes` becomes, at every vertex,
-    ``r -> radial * r``, ``l -> longitudinal * l`` and ``psi -> psi + twist``:
-    ``radial = longitudinal = 1`` and ``twist = 0`` leave the motion unchanged.
+    ``r -> radial * r``, ``l -> longitudinal * l`` and ``psi -> rotation * psi + twist``:
+    ``radial = longitudinal = rotation = 1`` and ``twist = 0`` leave the motion unchanged.
 
     Attributes
     ----------
@@ -211,11 +211,14 @@ class MotionModulation:
         Factor of the longitudinal shortening (dimensionless).
     twist : ndarray, shape (k,)
         Rotation about the long axis added to ``psi``, in degrees.
+    rotation : ndarray, shape (k,), or None
+        Factor of the rotation ``psi`` (None: 1).
     """
 
     radial: np.ndarray
     longitudinal: np.ndarray
     twist: np.ndarray
+    rotation: np.ndarray | None = None
 
 
 def lv_shapes(
@@ -269,6 +272,8 @@ def lv_shapes(
     if modulation is not None:
         r = r * modulation.radial
         shortening = shortening * modulation.longitudinal
+        if modulation.rotation is not None:
+            psi_deg = psi_deg * modulation.rotation
         psi_deg = psi_deg + modulation.twist
     psi = np.deg2rad(psi_deg)
     rho_es = (1.0 - r) * rho

@@ -3,8 +3,10 @@
 - :mod:`.two_groups`: the synthetic cohort in two groups with a planted regional
   motion abnormality (:func:`make_two_group_cohort`, :func:`write_two_group_cohort`);
   :mod:`.cycle_cohort`: its whole cardiac cycle, every subject's frames and images
-  (:func:`make_two_group_cycles`, :func:`two_group_cycles`), written as 4-D label or cine
-  images with :func:`write_cycle_cohort` (:mod:`.cycle_images`);
+  (:func:`make_two_group_cycles`, :func:`two_group_cycles`; in several groups with
+  covariates :func:`covariate_cycles`), written as 4-D label or cine images with
+  :func:`write_cycle_cohort` (:mod:`.cycle_images`); :mod:`.cohort_outcome`: a survival
+  outcome simulated from the true regional motion (:func:`cohort_outcome`);
 - :mod:`.covariate_cohort`: the synthetic cohort in several groups (planted abnormalities,
   anatomy shifts) with age, sex and body size acting on the shapes, and its design table
   (:func:`make_covariate_cohort`, :func:`write_covariate_cohort`); :mod:`.ideal_transport`:
@@ -23,6 +25,8 @@
   (:func:`segment_table`);
 - :mod:`.model_comparison`: a linear model's contrast tested per vertex (covariates,
   several groups, TFCE) and per AHA segment (:func:`compare_model`);
+  :mod:`.model_design`: a design table checked against a study's subjects, its
+  contrasts and blocks (:func:`model_design`, shared with the whole cycle's analysis);
   :mod:`.model_analysis`: the analysis of a study folder with a design table
   (:func:`analyze_model`), as ``symladders analyze --design`` runs it;
   :mod:`.outcome_analysis`: survival predicted from every motion (:func:`analyze_outcome`,
@@ -49,6 +53,7 @@ from .analysis import (
     select_motions,
 )
 from .analysis_outputs import write_analysis
+from .cohort_outcome import cohort_outcome, regional_motion
 from .covariate_cohort import (
     DESIGN_FILE,
     AnatomyShift,
@@ -61,6 +66,7 @@ from .covariate_cohort import (
 from .cycle_cohort import (
     CYCLE_ABNORMALITY,
     CohortCycles,
+    covariate_cycles,
     make_two_group_cycles,
     two_group_cycles,
 )
@@ -79,9 +85,10 @@ from .ideal_transport import (
     ideal_transport,
     transport_error,
 )
-from .model_analysis import ModelOutcome, analyze_model, check_design_table
+from .model_analysis import ModelOutcome, analyze_model
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model, model_responses
-from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays
+from .model_design import ModelDesign, check_design_table, groups_design, model_design
+from .outcome_analysis import OutcomeOutcome, analyze_outcome, outcome_arrays, predict_outcome
 from .segment_table import SegmentTable, segment_means, segment_table
 from .transported_motion import (
     NO_TRANSPORT,
@@ -106,9 +113,13 @@ __all__ = [
     "OutcomeOutcome",
     "analyze_outcome",
     "outcome_arrays",
+    "predict_outcome",
     "ModelOutcome",
     "analyze_model",
     "check_design_table",
+    "ModelDesign",
+    "groups_design",
+    "model_design",
     "MODEL_TESTS",
     "ModelComparison",
     "compare_model",
@@ -160,6 +171,9 @@ __all__ = [
     "VALVE_PLANES_FILE",
     "write_cycle_cohort",
     "two_group_cycles",
+    "covariate_cycles",
+    "cohort_outcome",
+    "regional_motion",
     "AnatomyShift",
     "CohortGroup",
     "CovariateCohort",

@@ -25,6 +25,7 @@ from ..recommendations import main_motion
 from .against_truth import TransportScore, score_transports
 from .analysis_outputs import write_analysis
 from .group_comparison import NORMALIZATIONS, GroupComparison, compare_groups
+from .model_design import compared_groups
 from .transported_motion import TransportedMotion, load_transported_motion
 
 __all__ = [
@@ -87,20 +88,7 @@ def check_groups_table(
             f"{len(absent)} subject(s) of the table are not in the study (no result at every "
             f"alpha^2): {shown}"
         )
-    present = list(dict.fromkeys(groups.values()))
-    if compare is None:
-        if len(present) != 2:
-            raise CohortError(
-                f"groups: expected two groups, the table has {len(present)}: {present}"
-                + ("; name the two to compare" if len(present) > 2 else "")
-            )
-        compare = (present[0], present[1])
-    compare = tuple(compare)
-    if len(compare) != 2 or compare[0] == compare[1]:
-        raise CohortError(f"compare: expected two different groups, got {compare}")
-    missing = [g for g in compare if g not in present]
-    if missing:
-        raise CohortError(f"compare: group(s) {missing} not in the table (it has {present})")
+    compare = compared_groups(groups, compare)
     kept = [s for s in subjects if groups.get(s) in compare]
     labels = np.array([groups[s] == compare[0] for s in kept])
     for name, count in ((compare[0], labels.sum()), (compare[1], (~labels).sum())):

@@ -18,8 +18,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from manifolds.validation import check_rng
-
 from ..cohort.cohort import Cohort, Subject
 from ..cohort.planted_effect import MotionAbnormality, planted_modulation, planted_region
 from ..cohort.segmentation_noise import smooth_normal_noise
@@ -31,6 +29,8 @@ from ..cohort.synthetic_lv import (
     make_synthetic_cohort,
 )
 from ..errors import CohortError
+from .cohort_outcome import OUTCOME_CENSORING, cohort_outcome
+from .covariate_model import AnatomyShift, Covariates, number
 from .two_groups import (
     _NOISE_KEY,
     CONTROLS,
@@ -49,167 +49,7 @@ __all__ = [
 #: The design table written next to the meshes (columns subject, group, age, sex, body_size).
 DESIGN_FILE = "design.csv"
 _COVARIATES_KEY = 4_000_000  # spawn keys of the covariate draws (one per group)
-_CLIP = 3.0  # the standard normal draws are clipped to +-3
-
-
-def _number(value, name: str, low: float, high: float) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        x = float("nan")
-    if isinstance(value, bool) or not low <= x <= high:
-        raise CohortError(f"{name}: expected a number in [{low:g}, {high:g}], got {value!r}")
-    return x
-
-
-def _check_fields(obj, bounds: dict) -> None:
-    """Each field of the frozen dataclass ``obj`` as a float within its bounds."""
-    for name, (low, high) in bounds.items():
-        value = _number(getattr(obj, name), f"{type(obj).__name__}.{name}", low, high)
-        object.__setattr__(obj, name, value)
-
-
-@dataclass(frozen=True)
-class AnatomyShift:
-    """A change of the end-diastolic anatomy of a group, its motion parameters unchanged.
-
-    The motion parameters (fractions and angles) are applied to the changed anatomy, so
-    the motion is the same relative to it: ``scale`` and ``sphericity`` are linear maps
-    ``diag(alpha, alpha, beta)`` of both shapes, which leave each subject's ES/ED volume
-    ratio exactly unchanged; ``bulge`` changes it slightly (the cavity's weight per level).
-
-    Attributes
-    ----------
-    scale : float, default 1.0
-        Factor of every length (base radius ``a`` and long axis ``c``), in [0.5, 2].
-    sphericity : float, default 1.0
-        Extra factor of the base radius ``a`` alone (> 1: rounder), in [0.5, 2].
-    bulge : float, default 0.0
-        Added to the mid-ventricular bulge ``b`` (> 0: wider mid-ventricle), in [-0.2, 0.2].
-    """
-
-    scale: float = 1.0
-    sphericity: float = 1.0
-    bulge: float = 0.0
-
-    def __post_init__(self):
-        _check_fields(self, {"scale": (0.5, 2), "sphericity": (0.5, 2), "bulge": (-0.2, 0.2)})
-
-    def apply(self, params):
-        """``params`` (a ``SubjectParameters``) with the anatomy changed."""
-        return replace(
-            params,
-            radius=params.radius * self.scale * self.sphericity,
-            long_axis=params.long_axis * self.scale,
-            bulge=params.bulge + self.bulge,
-        )
-
-
-@dataclass(frozen=True)
-class Covariates:
-    """Age, sex and body size: their distribution per group and their effect on the shapes.
-
-    Per subject ``z_age, z_size ~ N(0, 1)`` clipped to +-3, and with ``d = imbalance``
-    for every group but the first (0 for the first)::
-
-        age       = age_mean + age_sd (z_age + d shift)          (years, rounded to 0.1)
-        body_size = 1 + body_size_sd (z_size + d shift)          (rounded to 0.001)
-        sex       = "M" for round((male_fraction + d sex_shift) n) of the n subjects
-
-    Effects: ``r0`` and ``l`` are multiplied by
-    ``k = (1 - age_effect (age - age_mean) / age_sd) (1 - sex_effect [sex == "M"])`` and
-    ``a``, ``c`` by ``body_size``.
-
-    Attributes
-    ----------
-    age_mean, age_sd : float
-        The reference group's age distribution, in years (defaults 60 and 10).
-    age_effect : float, default 0.1
-        Relative reduction of the contraction per standard deviation of age, in [0, 0.15].
-    body_size_sd : float, default 0.08
-        Standard deviation of the body size (a length factor, mean 1), in [0, 0.15].
-    male_fraction : float, default 0.5
-    sex_effect : float, default 0.0
-        Relative reduction of the males' contraction, in [-0.2, 0.2] (0: no effect).
-    imbalance : float, default 0.0
-        How much the other groups' covariates differ from the first group's, in [0, 1].
-    shift : float, default 2.0
-        The age and body-size shift at ``imbalance = 1``, in standard deviations.
-    sex_shift : float, default 0.25
-        The change of the fraction of males at ``imbalance = 1``.
-    """
-
-    age_mean: float = 60.0
-    age_sd: float = 10.0
-    age_effect: float = 0.1
-    body_size_sd: float = 0.08
-    male_fraction: float = 0.5
-    sex_effect: float = 0.0
-    imbalance: float = 0.0
-    shift: float = 2.0
-    sex_shift: float = 0.25
-
-    def __post_init__(self):
-        _check_fields(self, {
-            "age_mean": (0, 150), "age_sd": (0.1, 50), "age_effect": (0, 0.15),
-            "body_size_sd": (0, 0.15), "male_fraction": (0, 1), "sex_effect": (-0.2, 0.2),
-            "imbalance": (0, 1), "shift": (-2, 2), "sex_shift": (-1, 1),
-        })  # fmt: skip
-        if not 0 <= self.male_fraction + self.imbalance * self.sex_shift <= 1:
-            raise CohortError(
-                f"Covariates.sex_shift: male_fraction + imbalance * sex_shift must lie in "
-                f"[0, 1], got {self.male_fraction + self.imbalance * self.sex_shift:g}"
-            )
-
-    def group_means(self, shifted: bool) -> dict:
-        """Expected age and body size and the fraction of males of a group."""
-        d = self.imbalance if shifted else 0.0
-        return {
-            "age": self.age_mean + d * self.shift * self.age_sd,
-            "body_size": 1.0 + d * self.shift * self.body_size_sd,
-            "male_fraction": self.male_fraction + d * self.sex_shift,
-        }
-
-    def draw(self, n: int, shifted: bool, rng: np.random.Generator) -> dict:
-        """The covariates of ``n`` subjects of one group (``shifted``: not the first).
-
-        Returns
-        -------
-        dict
-            ``age`` and ``body_size``, float arrays of shape ``(n,)``, and ``sex``, a
-            list of ``"F"``/``"M"``.
-        """
-        rng = check_rng(rng)
-        d = self.imbalance * self.shift if shifted else 0.0
-        z = np.clip(rng.standard_normal((2, n)), -_CLIP, _CLIP) + d
-        age = np.round(self.age_mean + self.age_sd * z[0], 1)
-        size = np.round(1.0 + self.body_size_sd * z[1], 3)
-        n_male = int(round(self.group_means(shifted)["male_fraction"] * n))
-        sex = np.where(rng.permutation(n) < n_male, "M", "F").tolist()
-        return {"age": age, "body_size": size, "sex": sex}
-
-    def contraction_factor(self, age, sex) -> np.ndarray:
-        """The factor ``k`` of ``r0`` and ``l`` (shape of ``age``; ``sex`` alike)."""
-        male = np.asarray(sex) == "M"
-        z = (np.asarray(age, dtype=float) - self.age_mean) / self.age_sd
-        return (1.0 - self.age_effect * z) * (1.0 - self.sex_effect * male)
-
-    def effects(self) -> dict:
-        """JSON-ready truth: each covariate's model and coefficients, and the imbalance."""
-        motion = "radial_contraction and longitudinal_shortening"
-        age = "1 - age_effect * (age - age_mean) / age_sd"
-        return {
-            "model": asdict(self),
-            "age": {"acts_on": motion, "factor": age,
-                    "factor_per_year": -self.age_effect / self.age_sd},
-            "sex": {"acts_on": motion, "factor": "1 - sex_effect if sex == 'M' else 1",
-                    "male_factor": 1.0 - self.sex_effect},
-            "body_size": {"acts_on": "every length of both shapes (radius and long_axis)",
-                          "length_exponent": 1, "volume_exponent": 3},
-            "imbalance": self.imbalance,
-            "reference_group_means": self.group_means(False),
-            "other_group_means": self.group_means(True),
-        }  # fmt: skip
+_OUTCOME_KEY = 5_000_000  # spawn key of the outcome's draw
 
 
 _EFFECTS = {"abnormality": MotionAbnormality, "anatomy": AnatomyShift}
@@ -266,6 +106,11 @@ class CovariateCohort:
     noise : float
         RMS of the segmentation noise, in mm.
     seed : int
+    outcome : dict or None
+        ``{subject: {"time": float, "event": 0 or 1}}``, a survival outcome simulated
+        from the regional motion (:func:`~.cohort_outcome.cohort_outcome`), or None.
+    outcome_effect : float or None
+        Its log hazard ratio per standard deviation of the regional motion.
     """
 
     cohort: Cohort
@@ -276,6 +121,8 @@ class CovariateCohort:
     model: Covariates
     noise: float = 0.0
     seed: int = 0
+    outcome: dict | None = None
+    outcome_effect: float | None = None
 
     @property
     def effects(self) -> dict:
@@ -283,11 +130,15 @@ class CovariateCohort:
         return self.model.effects()
 
     def design_table(self) -> dict:
-        """``{column: list}``: subject, group, age, sex, body_size in cohort order."""
+        """``{column: list}``: subject, group, age, sex, body_size (and time, event with an
+        outcome) in cohort order."""
         names = self.cohort.names
         table = {"subject": names, "group": [self.groups[s] for s in names]}
         for key in ("age", "sex", "body_size"):
             table[key] = [self.covariates[s][key] for s in names]
+        if self.outcome is not None:
+            for key in ("time", "event"):
+                table[key] = [self.outcome[s][key] for s in names]
         return table
 
     def description(self) -> dict:
@@ -310,6 +161,15 @@ class CovariateCohort:
             "region": None if first is None else self.regions[first].as_dict(),
             "groups": groups,
             "covariates": self.effects,
+            "outcome": None
+            if self.outcome is None
+            else {
+                "columns": ["time", "event"],
+                "log_hazard_ratio_per_sd": self.outcome_effect,
+                "of": "the normal motion ED -> ES averaged over the planted region (every "
+                "vertex without one), a weaker inward motion a higher hazard",
+                "censoring": OUTCOME_CENSORING,
+            },
         }
 
 
@@ -341,6 +201,7 @@ def make_covariate_cohort(
     noise: float = 0.0,
     noise_length: float = 10.0,
     model: SyntheticLVModel | None = None,
+    outcome_effect: float | None = None,
 ) -> CovariateCohort:
     """The synthetic cohort in several groups, with their planted effects and covariates.
 
@@ -363,6 +224,11 @@ def make_covariate_cohort(
         Segmentation noise RMS and correlation length, in mm (as in
         :func:`~ladders.study.population.make_two_group_cohort`).
     model : SyntheticLVModel, optional
+    outcome_effect : float, optional
+        Also a survival outcome (:func:`~.cohort_outcome.cohort_outcome`): the log hazard
+        ratio per standard deviation of each subject's normal motion ED -> ES over the
+        first planted region (every vertex without one); drawn from
+        ``SeedSequence(seed, spawn_key=(5000000,))``.
 
     Returns
     -------
@@ -373,7 +239,7 @@ def make_covariate_cohort(
     covariates = Covariates() if covariates is None else covariates
     if not isinstance(covariates, Covariates):
         raise CohortError(f"covariates: expected a Covariates, got {type(covariates).__name__}")
-    noise = _number(noise, "noise", 0.0, np.inf)
+    noise = number(noise, "noise", 0.0, np.inf)
     model = model or SyntheticLVModel()
     base = make_synthetic_cohort(sum(sizes), n_vertices=n_vertices, seed=seed, model=model)
     theta, phi, _ = lv_grid(*grid_shape(n_vertices), model)
@@ -413,7 +279,15 @@ def make_covariate_cohort(
         f"imbalance={covariates.imbalance:g}, noise={noise:g} mm, seed={seed})"
     )
     cohort = Cohort(base.atlas, base.faces, subjects, source)
-    return CovariateCohort(cohort, membership, table, regions, specs, covariates, noise, seed)
+    outcome = None
+    if outcome_effect is not None:
+        region = next((r.affected for r in regions.values() if r is not None), None)
+        time, event, _ = cohort_outcome(cohort, outcome_effect, _child(seed, _OUTCOME_KEY), region)
+        outcome = {s.name: {"time": float(f"{t:.6g}"), "event": int(e)}
+                   for s, t, e in zip(subjects, time, event)}  # fmt: skip
+        outcome_effect = float(outcome_effect)
+    return CovariateCohort(cohort, membership, table, regions, specs, covariates, noise, seed,
+                           outcome, outcome_effect)  # fmt: skip
 
 
 def write_covariate_cohort(data: CovariateCohort, folder, ext: str = ".vtk", **options) -> Path:

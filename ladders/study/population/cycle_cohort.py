@@ -23,18 +23,30 @@ transition so much that the incompressible wall would balloon there).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..cohort.cardiac_cycle import check_invertible, cycle_fraction, cycle_frames, frame_times
+from ..cohort.cardiac_cycle import (
+    check_invertible,
+    cycle_fraction,
+    cycle_frames,
+    frame_abnormality,
+    frame_times,
+)
 from ..cohort.planted_effect import MotionAbnormality
 from ..cohort.synthetic_lv import SubjectParameters, SyntheticLVModel, lv_grid, lv_shapes
 from ..errors import CohortError
 from ..imaging.cine import render_cine, render_labels
 from .two_groups import make_two_group_cohort
 
-__all__ = ["CYCLE_ABNORMALITY", "CohortCycles", "make_two_group_cycles", "two_group_cycles"]
+__all__ = [
+    "CYCLE_ABNORMALITY",
+    "CohortCycles",
+    "covariate_cycles",
+    "make_two_group_cycles",
+    "two_group_cycles",
+]
 
 #: The whole cycle's default abnormality: :class:`MotionAbnormality`'s hypokinesia of
 #: segments 7, 8, 13 and 14 at half the motion, with ring transitions of half-width 0.1 of
@@ -63,6 +75,11 @@ class CohortCycles:
         The patients' planted abnormality.
     data : TwoGroupCohort or None
         The cohort the cycles are of (its groups and planted region).
+    es_phase : float
+        The time of end-systole (fraction of the cycle).
+    planted : tuple
+        Each subject's planted abnormality (None: none), when the groups have their own
+        (a cohort of :func:`covariate_cycles`); empty: ``abnormality`` for the patients.
     """
 
     frames: np.ndarray
@@ -74,6 +91,8 @@ class CohortCycles:
     parameters: tuple = ()
     abnormality: MotionAbnormality | None = None
     data: object = None
+    es_phase: float = 0.35
+    planted: tuple = ()
 
     def _index(self, subject) -> int:
         if isinstance(subject, str):
@@ -86,12 +105,21 @@ class CohortCycles:
             raise CohortError(f"subject: expected a name or an index < {n}, got {subject!r}")
         return int(subject) % len(self.names)
 
-    def motion_of(self, subject) -> tuple[SubjectParameters, MotionAbnormality | None]:
-        """A subject's (name or index) parameters and planted abnormality (None for a control)."""
+    def motion_of(
+        self, subject, frame: int | None = None
+    ) -> tuple[SubjectParameters, MotionAbnormality | None]:
+        """A subject's (name or index) parameters and planted abnormality (None for a control);
+        with ``frame``, the abnormality acting at that frame (:func:`frame_abnormality`)."""
         i = self._index(subject)
         if len(self.parameters) != len(self.names):
             raise CohortError("parameters: these cycles carry no subject parameters")
-        return self.parameters[i], self.abnormality if self.patients[i] else None
+        abnormality = self.abnormality if self.patients[i] else None
+        if self.planted:
+            abnormality = self.planted[i]
+        if frame is not None:
+            self._fraction(frame)  # checks the frame
+            abnormality = frame_abnormality(abnormality, float(self.times[frame]), self.es_phase)
+        return self.parameters[i], abnormality
 
     def check_invertible(self) -> np.ndarray:
         """Every subject's smallest margin of :func:`check_invertible` over the frames.
@@ -100,16 +128,25 @@ class CohortCycles:
         subject whose motion folds the volume at some frame (its images cannot be rendered).
         """
         margins = np.empty(len(self.names))
+        planted = self.planted or (self.abnormality,)
+        timed = any(a is not None and a.kind == "delay" for a in planted)
+        frames = (
+            range(len(self.times)) if timed else np.unique(self.fractions, return_index=True)[1]
+        )
         for i, name in enumerate(self.names):
-            params, abnormality = self.motion_of(i)
             try:
                 margins[i] = min(
-                    check_invertible(params, f, abnormality) for f in set(self.fractions)
-                )
+                    check_invertible(*self._at(i, t)) for t in frames
+                )  # fmt: skip
             except CohortError as error:
                 hint = "make_two_group_cycles draws the cohort with CYCLE_ABNORMALITY"
                 raise CohortError(f"subject {name!r}: {error} ({hint})") from None
         return margins
+
+    def _at(self, i: int, frame: int) -> tuple:
+        """``(params, f, abnormality)`` of subject ``i`` at a frame."""
+        params, abnormality = self.motion_of(i, frame)
+        return params, float(self.fractions[frame]), abnormality
 
     def _fraction(self, frame) -> float:
         ok = isinstance(frame, (int, np.integer)) and not isinstance(frame, bool)
@@ -120,12 +157,12 @@ class CohortCycles:
 
     def render_labels(self, subject, affine, shape, frame: int, **options) -> np.ndarray:
         """A subject's label image at a frame (:func:`render_labels`, ``options`` its keywords)."""
-        params, abnormality = self.motion_of(subject)
+        params, abnormality = self.motion_of(subject, frame)
         return render_labels(params, affine, shape, self._fraction(frame), abnormality, **options)
 
     def render_cine(self, subject, affine, shape, frame: int, rng=None, **options) -> np.ndarray:
         """A subject's cine image at a frame (:func:`render_cine`, ``options`` its keywords)."""
-        params, abnormality = self.motion_of(subject)
+        params, abnormality = self.motion_of(subject, frame)
         f = self._fraction(frame)
         return render_cine(params, affine, shape, f, rng, abnormality=abnormality, **options)
 
@@ -180,24 +217,68 @@ def two_group_cycles(
     cohort = getattr(data, "cohort", None)
     if cohort is None or not hasattr(data, "labels") or not hasattr(data, "region"):
         raise CohortError(f"data: expected a TwoGroupCohort, got {type(data).__name__}")
+    abnormality = None if data.region is None else data.region.abnormality
+    patients = np.asarray(data.labels, dtype=bool)
+    planted = [abnormality if p else None for p in patients]
+    cycles = _cycles(data, planted, n_frames, es_phase, model)
+    return replace(cycles, patients=patients, abnormality=abnormality, planted=())
+
+
+def covariate_cycles(
+    data,
+    n_frames: int = 25,
+    es_phase: float = 0.35,
+    model: SyntheticLVModel | None = None,
+) -> CohortCycles:
+    """Every subject's frames of a cohort in several groups with covariates.
+
+    As :func:`two_group_cycles`, for a :class:`~.covariate_cohort.CovariateCohort`: each
+    subject's parameters already carry its covariates' effects (age and sex scale its
+    contraction and shortening, the body size its lengths) and its group's anatomy
+    shift, and its motion carries its group's planted abnormality through the whole
+    cycle, so that the covariates act on the motion at every frame.
+
+    Parameters
+    ----------
+    data : CovariateCohort
+        From :func:`~ladders.study.population.make_covariate_cohort`.
+    n_frames, es_phase, model : as :func:`two_group_cycles`
+
+    Returns
+    -------
+    CohortCycles
+        ``patients``: the subjects with a planted abnormality; ``abnormality``: the first
+        group's that has one; ``planted``: each subject's.
+    """
+    specs = {g.name: g for g in getattr(data, "specs", ())}
+    groups = getattr(data, "groups", None)
+    if getattr(data, "cohort", None) is None or not specs or groups is None:
+        raise CohortError(f"data: expected a CovariateCohort, got {type(data).__name__}")
+    planted = [specs[groups[s.name]].abnormality for s in data.cohort.subjects]
+    first = next((a for a in planted if a is not None), None)
+    cycles = _cycles(data, planted, n_frames, es_phase, model)
+    patients = np.array([a is not None for a in planted], dtype=bool)
+    return replace(cycles, patients=patients, abnormality=first, planted=tuple(planted))
+
+
+def _cycles(data, planted, n_frames, es_phase, model) -> CohortCycles:
+    """The frames of every subject of ``data.cohort`` with its planted abnormality."""
+    cohort = data.cohort
     times = frame_times(n_frames)
     n = len(times)
     fractions = cycle_fraction(times, es_phase)
     theta, phi = _grid_of(cohort, model or SyntheticLVModel())
-    abnormality = None if data.region is None else data.region.abnormality
-    patients = np.asarray(data.labels, dtype=bool)
     frames = []
-    for subject, patient in zip(cohort.subjects, patients):
+    for subject, abnormality in zip(cohort.subjects, planted):
         if not isinstance(subject.parameters, SubjectParameters):
             raise CohortError(f"data: subject {subject.name!r} has no synthetic parameters")
-        planted = abnormality if patient else None
-        frames.append(cycle_frames(subject.parameters, theta, phi, n, es_phase, planted))
+        frames.append(cycle_frames(subject.parameters, theta, phi, n, es_phase, abnormality))
     stacked = np.stack(frames) if frames else np.zeros((0, n, len(cohort.atlas), 3))
     names = tuple(s.name for s in cohort.subjects)
     parameters = tuple(s.parameters for s in cohort.subjects)
-    return CohortCycles(
-        stacked, names, patients, times, fractions, cohort.faces, parameters, abnormality, data
-    )
+    patients = np.array([a is not None for a in planted], dtype=bool)
+    return CohortCycles(stacked, names, patients, times, fractions, cohort.faces, parameters,
+                        None, data, float(es_phase), tuple(planted))  # fmt: skip
 
 
 def make_two_group_cycles(

@@ -1,10 +1,13 @@
 """The whole-cycle cohort on disk: 4-D label or cine images, the frames as meshes, the truth.
 
 :func:`write_cycle_cohort` writes what a cardiac pipeline starts from, for a cohort of
-:func:`~ladders.study.population.make_two_group_cycles`::
+:func:`~ladders.study.population.make_two_group_cycles` (or, in several groups with
+covariates, of :func:`~ladders.study.population.covariate_cycles`)::
 
     <folder>/atlas.vtk, <subject>_ed.vtk, <subject>_es.vtk, groups.csv,
     planted_region.json           as write_two_group_cohort (the ES frame's surfaces)
+    <folder>/design.csv           several groups and covariates: as write_covariate_cohort
+                                  (subject, group, age, sex, body_size; time, event)
     <folder>/images/<subject>.nii.gz
                                   the subject's 4-D series (frames on the fourth axis,
                                   frame 0 at ED): labels (0 background, 1 blood pool,
@@ -45,6 +48,7 @@ from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from ..preparation.synthetic_landmarks import synthetic_landmarks
 from ..tracking.base_planes import rim_plane
 from ..volume import boundary_vertices
+from .covariate_cohort import CovariateCohort, write_covariate_cohort
 from .two_groups import write_two_group_cohort
 
 __all__ = [
@@ -171,7 +175,10 @@ def write_cycle_cohort(
     data = getattr(cycles, "data", None)
     if data is None or not hasattr(cycles, "render_labels"):
         raise CohortError(f"cycles: expected a CohortCycles, got {type(cycles).__name__}")
-    folder = write_two_group_cohort(data, folder)
+    if isinstance(data, CovariateCohort):  # several groups and covariates: also design.csv
+        folder = write_covariate_cohort(data, folder)
+    else:
+        folder = write_two_group_cohort(data, folder)
     if landmarks:
         table = {"atlas": synthetic_landmarks(data.cohort.atlas)}
         table.update((name, synthetic_landmarks(cycles.frames[i, 0]))

@@ -17,7 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..cohort.cardiac_cycle import motion_forward
+from ..cohort.cardiac_cycle import frame_abnormality, motion_forward
 from ..cohort.planted_effect import planted_modulation
 from ..cohort.synthetic_lv import (
     SubjectParameters,
@@ -143,8 +143,10 @@ def ideal_cycle_transport(cycles, model: SyntheticLVModel | None = None) -> np.n
     for i, s in enumerate(data.cohort.subjects):
         params = _motion_on(mean, s)
         abnormality = cycles.abnormality if cycles.patients[i] else None
+        es_phase = getattr(cycles, "es_phase", 0.35)
         for t, f in enumerate(cycles.fractions):
-            out[i, t] = motion_forward(params, atlas, float(f), abnormality) - atlas
+            acting = frame_abnormality(abnormality, float(cycles.times[t]), es_phase)
+            out[i, t] = motion_forward(params, atlas, float(f), acting) - atlas
     return out
 
 

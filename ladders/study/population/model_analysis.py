@@ -24,8 +24,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ladders.statistics import contrast_matrix, design_matrix
-from ladders.tables import locate
 from manifolds.validation import check_int
 
 from ..errors import CohortError
@@ -36,10 +34,11 @@ from .aha_model import AHA_NAMES, aha_segments
 from .analysis import select_motions
 from .group_comparison import normalize_motion
 from .model_comparison import MODEL_TESTS, ModelComparison, compare_model
+from .model_design import model_design
 from .model_figures import plot_model_map
 from .transported_motion import load_transported_motion
 
-__all__ = ["ModelOutcome", "check_design_table", "analyze_model", "main_comparison"]
+__all__ = ["ModelOutcome", "analyze_model", "main_comparison"]
 
 _KINDS = {"t": "t", "F": "F", "pillai": "Pillai's V"}
 
@@ -52,32 +51,6 @@ class ModelOutcome:
     main: list[ModelComparison]
     paths: dict = field(default_factory=dict)
     left_out: list = field(default_factory=list)
-
-
-def check_design_table(table: dict, subjects: list[str]) -> tuple[list[str], list[str]]:
-    """The study's subjects in the design, and those left out; raise for design-only subjects.
-
-    Raises
-    ------
-    CohortError
-        The table has no ``subject`` column, or names subjects the study does not have
-        (listed), or shares fewer than 3 subjects with the study.
-    """
-    if "subject" not in table:
-        raise CohortError(f"design: no 'subject' column (columns: {', '.join(table)})")
-    listed = [str(s).strip() for s in table["subject"]]
-    unknown = [s for s in listed if s not in set(subjects)]
-    if unknown:
-        raise CohortError(
-            f"{locate(table, 'subject', unknown[0], 'design')}: unknown subject {unknown[0]!r}: "
-            f"subject(s) {', '.join(unknown)} not in the study (it has {len(subjects)} subjects "
-            "with results)"
-        )
-    kept = [s for s in subjects if s in set(listed)]
-    left_out = [s for s in subjects if s not in set(listed)]
-    if len(kept) < 3:
-        raise CohortError(f"design: {len(kept)} subject(s) shared with the study, need at least 3")
-    return kept, left_out
 
 
 def main_comparison(comparisons: list[ModelComparison]) -> list[ModelComparison]:
@@ -259,6 +232,7 @@ def analyze_model(
     progress: bool = True,
     figures: bool = True,
     fwhm: float | None = None,
+    source=None,
 ) -> ModelOutcome:
     """Test the contrasts of a linear model on a study's transported motion; write the analysis.
 
@@ -292,28 +266,17 @@ def analyze_model(
     fwhm : float, optional
         Smooth every subject's maps on the atlas before the tests (mm, full width at
         half maximum; :func:`~.model_comparison.compare_model`).
+    source : path, optional
+        The design table's file, named in the errors.
 
     Returns
     -------
     ModelOutcome
     """
     n_permutations = check_int(n_permutations, "n_permutations", minimum=1)
-    if not contrasts:
-        raise CohortError("contrast: give at least one contrast")
     motions = select_motions(load_transported_motion(study_output), alpha2, methods)
-    kept, left_out = check_design_table(table, motions[0].subjects)
-    try:
-        design = design_matrix(table, formula, subjects=kept)
-        for spec in contrasts:  # every contrast checked before any computation
-            contrast_matrix(design, spec)
-    except ValueError as exc:
-        raise CohortError(str(exc)) from None
-    block_labels = None
-    if blocks is not None:
-        if blocks not in table:
-            raise CohortError(f"blocks: no column {blocks!r} in the design table")
-        by_subject = dict(zip([str(s).strip() for s in table["subject"]], table[blocks]))
-        block_labels = np.array([str(by_subject[s]) for s in kept])
+    model = model_design(table, formula, contrasts, motions[0].subjects, blocks, source)
+    design, block_labels, kept, left_out = model.design, model.blocks, model.kept, model.left_out
     motions = [m.subset(kept) for m in motions]
     if normalize == "volume":
         motions = [normalize_motion(m)[0] for m in motions]

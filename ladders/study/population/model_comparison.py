@@ -49,7 +49,7 @@ from .segment_table import segment_means
 from .transported_motion import TransportedMotion
 
 __all__ = ["MODEL_TESTS", "TFCE_HEIGHT", "TFCE_EXTENT", "ModelComparison", "compare_model",
-           "model_responses"]  # fmt: skip
+           "contrast_effects", "model_responses", "model_tests"]  # fmt: skip
 
 #: The per-vertex tests of a :class:`ModelComparison`.
 MODEL_TESTS = ("displacement", "normal", "strain", "wall_motion")
@@ -119,9 +119,52 @@ def model_responses(motion: TransportedMotion, fwhm: float | None = None) -> dic
     return {"displacement": vectors, **smoothed}
 
 
-def _effect(test) -> np.ndarray | None:
-    """The contrast's estimate per vertex (and component) for a one-row contrast, else None."""
-    return test.effect[0] if test.effect.shape[0] == 1 else None
+def contrast_effects(tests: dict) -> dict:
+    """``{name: the contrast's estimate per vertex (and component)}`` of the tests of a
+    one-row contrast (an F test has none: left out)."""
+    return {name: r.effect[0] for name, r in tests.items() if r.effect.shape[0] == 1}
+
+
+def model_tests(
+    responses: dict,
+    design: Design,
+    contrast,
+    n_permutations: int,
+    rng: np.random.Generator,
+    *,
+    method: str = "freedman_lane",
+    blocks=None,
+    adjacency=None,
+    progress: bool = False,
+) -> dict:
+    """Each response tested for one contrast of the linear model, one permutation stream.
+
+    Parameters
+    ----------
+    responses : dict
+        ``{name: array (n, k) or (n, k, d)}``, the rows in the order of the design's.
+    design : Design
+    contrast : str or array
+    n_permutations : int
+    rng : numpy.random.Generator
+    method : str
+        :data:`ladders.statistics.METHODS`.
+    blocks : array, shape (n,), optional
+        Exchangeability blocks.
+    adjacency : dict, optional
+        ``{name: sparse (k, k)}``: threshold-free cluster enhancement of that response's
+        maps on this graph (``H = 2``, ``E = 1``; a response without one: none).
+    progress : bool
+
+    Returns
+    -------
+    dict
+        ``{name: GLMTest}`` in the order of ``responses``.
+    """
+    adjacency = adjacency or {}
+    return {name: glm_test(y, design, contrast, n_permutations, rng, method, blocks,
+                           tfce=adjacency.get(name), progress=progress)
+            for name, y in responses.items()}  # fmt: skip
 
 
 def compare_model(
@@ -172,19 +215,17 @@ def compare_model(
         raise CohortError("design: its subjects are not the motion's, in the motion's order")
     name, c = contrast_matrix(design, contrast)
     responses = model_responses(motion, fwhm)
-    adjacency = mesh_adjacency(motion.faces, motion.atlas.shape[0]) if tfce else None
-    tests = {test: glm_test(responses[test], design, c, n_permutations, rng, method, blocks,
-                            tfce=adjacency, progress=progress)
-             for test in MODEL_TESTS}  # fmt: skip
-    effects = {t: e for t, r in tests.items() if (e := _effect(r)) is not None}
+    graph = mesh_adjacency(motion.faces, motion.atlas.shape[0]) if tfce else None
+    options = {"method": method, "blocks": blocks, "progress": progress}
+    tests = model_tests(responses, design, c, n_permutations, rng,
+                        adjacency={t: graph for t in MODEL_TESTS} if tfce else None,
+                        **options)  # fmt: skip
+    effects = contrast_effects(tests)
     segment_tests = segment_effects = None
     if segments is not None:
         segments = np.asarray(segments)
-        segment_tests = {
-            test: glm_test(segment_means(responses[test], segments), design, c, n_permutations,
-                           rng, method, blocks)
-            for test in MODEL_TESTS
-        }  # fmt: skip
-        segment_effects = {t: e for t, r in segment_tests.items() if (e := _effect(r)) is not None}
+        means = {t: segment_means(responses[t], segments) for t in MODEL_TESTS}
+        segment_tests = model_tests(means, design, c, n_permutations, rng, **options)
+        segment_effects = contrast_effects(segment_tests)
     return ModelComparison(motion, design, name, tests, effects, segments, segment_tests,
                            segment_effects)  # fmt: skip

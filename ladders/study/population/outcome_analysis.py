@@ -26,10 +26,10 @@ from ladders.statistics import SurvivalResult, cross_validated_c_index_from_moti
 from ..errors import CohortError
 from ..files import atomic_write_text
 from .analysis import select_motions
-from .model_analysis import check_design_table
+from .model_design import check_design_table
 from .transported_motion import TransportedMotion, load_transported_motion
 
-__all__ = ["OutcomeOutcome", "outcome_arrays", "analyze_outcome"]
+__all__ = ["OutcomeOutcome", "outcome_arrays", "analyze_outcome", "predict_outcome"]
 
 
 @dataclass
@@ -77,7 +77,7 @@ def outcome_arrays(table: dict, time: str, event: str, baseline, subjects):
     return t, e.astype(bool), base
 
 
-def _label(m: TransportedMotion) -> str:
+def _label(m) -> str:
     return m.label + ("" if m.alpha2 is None else f", alpha^2 = {m.alpha2:g}")
 
 
@@ -129,6 +129,7 @@ def analyze_outcome(
     n_splits: int = 5,
     n_bootstrap: int = 1000,
     seed: int = 0,
+    source=None,
 ) -> OutcomeOutcome:
     """Predict a survival outcome from every motion of a study (see the module).
 
@@ -146,33 +147,86 @@ def analyze_outcome(
     alpha2, methods : optional
         Restrict the motions.
     n_components, n_splits, n_bootstrap, seed : int
+    source : path, optional
+        The design table's file, named in the errors.
 
     Returns
     -------
     OutcomeOutcome
     """
     motions = select_motions(load_transported_motion(study_output), alpha2, methods)
-    kept, left_out = check_design_table(table, motions[0].subjects)
+    kept, left_out = check_design_table(table, motions[0].subjects, source)
+    motions = [m.subset(kept) for m in motions]
+    folder = Path(output) if output is not None else Path(study_output) / "analysis"
+    return predict_outcome(
+        [(m, m.displacement) for m in motions], table, time, event, kept, folder,
+        baseline=baseline, n_components=n_components, n_splits=n_splits,
+        n_bootstrap=n_bootstrap, seed=seed, left_out=left_out,
+        header=f"Study: {Path(study_output).resolve()}", what="the displacements",
+    )  # fmt: skip
+
+
+def predict_outcome(
+    features: list,
+    table: dict,
+    time: str,
+    event: str,
+    kept: list,
+    folder,
+    *,
+    baseline=None,
+    n_components: int = 5,
+    n_splits: int = 5,
+    n_bootstrap: int = 1000,
+    seed: int = 0,
+    left_out=(),
+    header: str = "",
+    what: str = "the motion",
+) -> OutcomeOutcome:
+    """Predict the outcome from each motion's PCA scores; write ``outcome.csv`` and its summary.
+
+    Parameters
+    ----------
+    features : list of (motion, array (n, ...))
+        Each motion (``name``, ``label``, ``deformation``, ``method``, ``alpha2``: a
+        :class:`TransportedMotion` or alike) and its per-subject values (flattened for
+        the PCA), the rows those of ``kept``.
+    table : dict
+        The design table.
+    time, event : str
+        Its columns of the follow-up time and the event.
+    kept : list of str
+        The subjects, in the rows' order.
+    folder : path
+    baseline, n_components, n_splits, n_bootstrap, seed : see :func:`analyze_outcome`
+    left_out : list of str
+        Named in the summary.
+    header, what : str
+        The study, and what the PCA is of, in the summary.
+
+    Returns
+    -------
+    OutcomeOutcome
+    """
     t, e, base = outcome_arrays(table, time, event, baseline, kept)
     if not e.any():
         raise CohortError(f"outcome: column {event!r}: no event among the subjects")
-    motions = [m.subset(kept) for m in motions]
     results = []
-    for m in motions:
+    for m, values in features:
         try:
             r = cross_validated_c_index_from_motion(
-                m.displacement, t, e, n_components=n_components, n_splits=n_splits,
+                values, t, e, n_components=n_components, n_splits=n_splits,
                 rng=np.random.default_rng(seed), baseline=base, n_bootstrap=n_bootstrap,
             )  # fmt: skip
         except ValueError as exc:
             raise CohortError(f"outcome: {exc}") from None
         results.append((m, r))
-    folder = Path(output) if output is not None else Path(study_output) / "analysis"
+    folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     name = ", ".join(baseline) if baseline else ""
-    header = (f"Study: {Path(study_output).resolve()}; {len(kept)} subjects, {int(e.sum())} "
-              f"events; Cox on {n_components} PCA scores of the displacements, {n_splits} folds, "
-              f"{n_bootstrap} bootstrap resamples; seed {seed}.")  # fmt: skip
+    header = (f"{header}; {len(kept)} subjects, {int(e.sum())} events; Cox on {n_components} "
+              f"PCA scores of {what}, {n_splits} folds, {n_bootstrap} bootstrap resamples; "
+              f"seed {seed}.")  # fmt: skip
     if left_out:
         header += f" Left out (not in the design table): {', '.join(left_out)}."
     paths = {}
@@ -180,4 +234,4 @@ def analyze_outcome(
                        ("outcome_summary.md", _markdown(results, header, name))):  # fmt: skip
         atomic_write_text(folder / file, text)
         paths[file] = folder / file
-    return OutcomeOutcome(results, paths, left_out)
+    return OutcomeOutcome(results, paths, list(left_out))
