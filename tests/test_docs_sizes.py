@@ -2,8 +2,8 @@
 
 The pages come in three parts, as ``docs/index.md`` lists them: the user guide (the
 README and the pages of the toctree "The user guide": what to do and what a result
-means), the library (the toctree "The library": the spaces, the ladders and the
-registrations, for building on them) and the evidence (``docs/evidence/*.md``, the
+means), the library (the toctree "The library": the spaces, the ladders, the
+registrations and the statistics, for building on them) and the evidence (``docs/evidence/*.md``, the
 toctree "The evidence": the validation and benchmark reports, their generated tables,
 causes and history). A guide or library page stays under :data:`MAX_PAGE_LINES`
 lines and the user guide under :data:`MAX_GUIDE_LINES` in all; the evidence is as long
