@@ -12,9 +12,7 @@ changed covariate reruns the analysis alone.
 
 import csv
 import json
-import re
 import shlex
-from pathlib import Path
 
 import nibabel as nib
 import numpy as np
@@ -22,12 +20,7 @@ import pytest
 
 from ladders.study.cli import build_parser
 from tests.cli_runner import run_cli
-
-TUTORIAL = Path(__file__).resolve().parents[1] / "docs" / "tutorial_own_data.md"
-#: Folders of the tutorial's tree that this cohort does not make, and why.
-NOT_MADE_HERE = {
-    "cycle_analysis/": "three subjects or more of two groups with a series; one has a series here"
-}
+from tests.tutorial_tree import CYCLE_FOLDERS, TUTORIAL, missing, tree_of_the_tutorial
 
 N_PER_GROUP = 4
 #: The cohort's settings with options that make it quick (smaller meshes, one atlas
@@ -173,33 +166,11 @@ def test_a_changed_covariate_reruns_the_analysis_alone(route, tmp_path):
     assert record["steps"]["mesh"]["status"] == "partial"
 
 
-def tree_of_the_tutorial(text: str) -> list[str]:
-    """The paths the tutorial's "What each step wrote" tree names, relative to the results
-    folder, as glob patterns (``<subject>``, ``<step>``, ``<kk>``: any name)."""
-    block = re.search(r"## 4\. What each step wrote\n\n```\n(.*?)```", text, re.S).group(1)
-    paths, folder = [], ""
-    for line in block.splitlines()[1:]:
-        entry, _, description = line.strip().partition("  ")
-        if line.startswith("    ") and not line.startswith("     "):
-            folder = entry if entry.endswith("/") else ""
-            paths.append(entry)
-        else:
-            description = line.strip()
-        names = re.findall(r"(?:[\w<>*-]+/)*[\w<>*.-]+\.(?:md|csv|vtk|vtu|json|npz|png|log)\b"
-                           r"|[\w<>-]+/(?=[,:\s]|$)", description)  # fmt: skip
-        paths += [folder + name for name in names if folder]
-    return [re.sub(r"<\w+>", "*", path) for path in paths]
-
-
 def test_the_tutorial_names_what_the_route_wrote(route):
-    """Every file and folder docs/tutorial_own_data.md says the route writes, it wrote."""
+    """Every file and folder of the ED-ES steps docs/tutorial_own_data.md says the route
+    writes, it wrote (the whole cycle's and the wall's: test_route_cycle.py)."""
     folder, *_ = route
-    results = folder / "study_results"
-    expected = tree_of_the_tutorial(TUTORIAL.read_text(encoding="utf-8"))
+    expected = [p for p in tree_of_the_tutorial() if not p.startswith(CYCLE_FOLDERS)]
     assert "analysis/model_vertices.csv" in expected and "tracked/*/frame_*.vtk" in expected
-    missing = [
-        path
-        for path in expected
-        if path not in NOT_MADE_HERE and not list(results.glob(path.rstrip("/")))
-    ]
-    assert not missing, f"named in {TUTORIAL.name} but not written by the route: {missing}"
+    absent = missing(folder / "study_results", expected)
+    assert not absent, f"named in {TUTORIAL.name} but not written by the route: {absent}"

@@ -11,8 +11,11 @@ covariates, of :func:`~ladders.study.population.covariate_cycles`)::
     <folder>/images/<subject>.nii.gz
                                   the subject's 4-D series (frames on the fourth axis,
                                   frame 0 at ED): labels (0 background, 1 blood pool,
-                                  2 myocardium) or cine intensities (noise, partial
-                                  volume, optionally tagging)
+                                  2 myocardium, 3 right ventricle) or cine intensities
+                                  (noise, partial volume, optionally tagging)
+    <folder>/subjects.csv, study.toml
+                                  with labels: the subjects table and the settings of
+                                  ``symladders run`` (the cohort as a user holds it)
     <folder>/frames/<subject>/frame_<kk>.vtk
                                   the true surfaces of every frame, in the atlas's
                                   correspondence (what ``symladders track`` estimates)
@@ -49,6 +52,7 @@ from ..preparation.synthetic_landmarks import synthetic_landmarks
 from ..tracking.base_planes import rim_plane
 from ..volume import boundary_vertices
 from .covariate_cohort import CovariateCohort, write_covariate_cohort
+from .image_cohort import subjects_table, with_rv_label, write_run_files
 from .two_groups import write_two_group_cohort
 
 __all__ = [
@@ -193,8 +197,9 @@ def write_cycle_cohort(
     for i, name in enumerate(tqdm(cycles.names, desc="subjects", disable=not progress)):
         affine, shape = cycle_grid(cycles.frames[i, 0], in_plane, thickness)
         grids[name] = {"affine": affine.tolist(), "shape": list(shape)}
-        if images == "labels":
-            series = [cycles.render_labels(i, affine, shape, t) for t in range(len(cycles.times))]
+        if images == "labels":  # with the right ventricle's label against the ED septum
+            series = [with_rv_label(cycles.render_labels(i, affine, shape, t), affine,
+                                    cycles.frames[i, 0]) for t in range(len(cycles.times))]  # fmt: skip
         elif images == "cine":
             series = [cycles.render_cine(i, affine, shape, t, rng, noise=noise, tagging=tagging)
                       for t in range(len(cycles.times))]  # fmt: skip
@@ -213,10 +218,13 @@ def write_cycle_cohort(
         "voxel_mm": [in_plane, in_plane, thickness],
         "tagging": None if tagging is None else vars(tagging),
         "noise": noise if images == "cine" else None,
-        "labels": {"background": 0, "blood_pool": 1, "myocardium": 2},
+        "labels": {"background": 0, "blood_pool": 1, "myocardium": 2, "right_ventricle": 3},
         "grids": grids,
         "landmarks": LANDMARKS_FILE if landmarks else None,
         "valve_planes": VALVE_PLANES_FILE,
     }
     (folder / "cycle.json").write_text(json.dumps(record, indent=1), encoding="utf-8")
+    if images == "labels":  # the cohort as a user holds it, for symladders run
+        names = {n: [f"images/{n}.nii.gz"] for n in cycles.names}
+        write_run_files(folder, subjects_table(data), names, myocardium=True)
     return folder

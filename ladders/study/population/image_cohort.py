@@ -31,7 +31,8 @@ from ..errors import CohortError
 from ..imaging import add_rv_label, voxelize, write_label_image
 from ..preparation.synthetic_landmarks import synthetic_landmarks
 
-__all__ = ["LABELS", "write_image_cohort", "SUBJECTS_FILE", "SETTINGS_FILE"]
+__all__ = ["LABELS", "write_image_cohort", "write_run_files", "subjects_table", "with_rv_label",
+           "SUBJECTS_FILE", "SETTINGS_FILE"]  # fmt: skip
 
 #: The label values of the images written (UK Biobank's convention).
 LABELS = {"blood_pool": 1, "myocardium": 2, "right_ventricle": 3}
@@ -40,7 +41,7 @@ SETTINGS_FILE = "study.toml"
 _MARGIN = 22.0  # mm around the ventricle: room for the right ventricle beside the septum
 
 
-def _with_rv(labels, affine, surface) -> np.ndarray:
+def with_rv_label(labels, affine, surface) -> np.ndarray:
     """The labels with the RV crescent against the septum of the ED surface ``surface``."""
     lm = synthetic_landmarks(surface)
     septum = np.asarray(lm.septum) - np.asarray(lm.apex)
@@ -64,7 +65,7 @@ def _pair(folder: Path, name: str, ed, es, faces, spacing: float, thickness: flo
     files = []
     for phase, surface in (("ed", ed), ("es", es)):
         labels = voxelize(surface, faces, affine, shape, label=LABELS["blood_pool"])
-        labels = _with_rv(labels, affine, ed)
+        labels = with_rv_label(labels, affine, ed)
         path = folder / "images" / f"{name}_{phase}.nii.gz"
         write_label_image(path, labels, affine)
         files.append(path.relative_to(folder).as_posix())
@@ -80,7 +81,9 @@ def _cycle_images(folder: Path, cycles, i: int, series: bool, in_plane, thicknes
     affine, shape = cycle_grid(ed, in_plane, thickness)
     es = int(np.argmax(cycles.fractions))
     frames = range(len(cycles.times)) if series else (0, es)
-    rendered = [_with_rv(cycles.render_labels(i, affine, shape, t), affine, ed) for t in frames]
+    rendered = [
+        with_rv_label(cycles.render_labels(i, affine, shape, t), affine, ed) for t in frames
+    ]
     if series:
         path = folder / "images" / f"{name}.nii.gz"
         write_series(path, rendered, affine)
@@ -93,7 +96,7 @@ def _cycle_images(folder: Path, cycles, i: int, series: bool, in_plane, thicknes
     return files
 
 
-def _settings(truth: bool) -> str:
+def _settings(truth: bool, myocardium: bool) -> str:
     lines = [
         "# symladders run study.toml: the route from these images to the adjusted maps.",
         f'subjects = "{SUBJECTS_FILE}"',
@@ -102,6 +105,8 @@ def _settings(truth: bool) -> str:
         f"label = {LABELS['blood_pool']}  # the left ventricle's blood pool",
         f"rv_label = {LABELS['right_ventricle']}  # the right ventricle: landmarks, AHA segments",
     ]
+    if myocardium:
+        lines.append(f"myocardium_label = {LABELS['myocardium']}  # the wall: thickness, strain")
     if truth:
         lines += [
             "",
@@ -109,6 +114,38 @@ def _settings(truth: bool) -> str:
             'truth = "planted_region.json"  # a synthetic cohort: score the maps',
         ]
     return "\n".join(lines) + "\n"
+
+
+def subjects_table(cohort_data) -> dict:
+    """The cohort's subjects with their group and covariates (``design_table()`` of a cohort
+    with covariates), ``{column: list}`` in the cohort's order."""
+    cohort = cohort_data.cohort
+    if hasattr(cohort_data, "design_table"):
+        return cohort_data.design_table()
+    return {"subject": cohort.names, "group": [cohort_data.groups[s] for s in cohort.names]}
+
+
+def write_run_files(folder, table: dict, images: dict, *, myocardium: bool = False) -> None:
+    """``subjects.csv`` and ``study.toml`` of a synthetic cohort written as label images.
+
+    ``table``: :func:`subjects_table`; ``images``: per subject, its image files relative to
+    ``folder``, one (a series) or two (ED and ES). The settings name the planted truth
+    when ``folder/planted_region.json`` has a region.
+    """
+    folder = Path(folder)
+    covariates = [c for c in table if c != "subject"]
+    rows = []
+    for j, name in enumerate(table["subject"]):
+        files = images[name]
+        image, ed, es = (files[0], "", "") if len(files) == 1 else ("", *files)
+        rows.append([name, image, ed, es, *(table[c][j] for c in covariates)])
+    with open(folder / SUBJECTS_FILE, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(["subject", "image", "ed_image", "es_image", *covariates])
+        writer.writerows(rows)
+    truth = json.loads((folder / "planted_region.json").read_text(encoding="utf-8"))
+    text = _settings(truth.get("region") is not None, myocardium)
+    (folder / SETTINGS_FILE).write_text(text, encoding="utf-8")
 
 
 def write_image_cohort(data, folder, *, spacing: float = 1.5, thickness: float | None = None,
@@ -150,31 +187,17 @@ def write_image_cohort(data, folder, *, spacing: float = 1.5, thickness: float |
         (truth_folder / "planted_region.json").read_text(encoding="utf-8"), encoding="utf-8"
     )
     cohort = cohort_data.cohort
-    table = (cohort_data.design_table() if hasattr(cohort_data, "design_table")
-             else {"subject": cohort.names, "group": [cohort_data.groups[s] for s in cohort.names]})  # fmt: skip
-    covariates = [c for c in table if c != "subject"]
     n = len(cohort.subjects)
     n_series = n if n_series is None else int(n_series)
     if cycles is None and n_series and n_series != n:
         raise CohortError("n_series: only a whole-cycle cohort has series")
-    rows = []
+    images = {}
     for i, subject in enumerate(cohort.subjects):
         if cycles is not None:
-            series = i < n_series
-            files = _cycle_images(folder, cycles, i, series, spacing, thickness)
+            files = _cycle_images(folder, cycles, i, i < n_series, spacing, thickness)
         else:
-            series = False
-            files = _pair(
-                folder, subject.name, subject.ed, subject.es, cohort.faces, spacing, thickness
-            )
-        image, ed, es = (files[0], "", "") if series else ("", *files)
-        j = table["subject"].index(subject.name)
-        rows.append([subject.name, image, ed, es, *(table[c][j] for c in covariates)])
-    with open(folder / SUBJECTS_FILE, "w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh, lineterminator="\n")
-        writer.writerow(["subject", "image", "ed_image", "es_image", *covariates])
-        writer.writerows(rows)
-    truth = json.loads((folder / "planted_region.json").read_text(encoding="utf-8"))
-    (folder / SETTINGS_FILE).write_text(_settings(truth.get("region") is not None),
-                                        encoding="utf-8")  # fmt: skip
+            files = _pair(folder, subject.name, subject.ed, subject.es, cohort.faces, spacing,
+                          thickness)  # fmt: skip
+        images[subject.name] = files
+    write_run_files(folder, subjects_table(cohort_data), images, myocardium=cycles is not None)
     return folder

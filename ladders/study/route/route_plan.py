@@ -13,6 +13,8 @@ step                command                                                 fold
 ``analysis``        ``symladders analyze`` with the table's model          ``analysis/``
 ``cycle-study``     ``symladders cycle-study`` of the tracked subjects     ``cycle_study/``
 ``cycle-analysis``  ``symladders cycle-analyze`` with the model            ``cycle_analysis/``
+``wall``            ``symladders wall``: thickness and strain (myocardium)  ``wall/``
+``wall-analysis``   ``symladders cycle-analyze --measure thickening``       ``wall_analysis/``
 ``report``          ``report.md``: the entry point to the results          ``.``
 ==================  ======================================================  ==============
 
@@ -35,7 +37,7 @@ from .subjects_table import SubjectsTable
 __all__ = ["Step", "plan_route", "STEP_NAMES"]
 
 STEP_NAMES = ("mesh", "atlas", "correspond", "track", "study", "analysis", "cycle-study",
-              "cycle-analysis", "report")  # fmt: skip
+              "cycle-analysis", "wall", "wall-analysis", "report")  # fmt: skip
 
 
 @dataclass
@@ -143,8 +145,10 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
     tracked = out / "tracked"
     track = settings["tracking"]["track"] and bool(table.tracked)
     if track:
-        argv = [inputs.tracked_meshes, inputs.series, "--label", str(images["label"]), "-o",
-                tracked, *batch]  # fmt: skip
+        argv = [inputs.tracked_meshes, inputs.series, "--label", str(images["label"])]
+        if images["myocardium_label"] is not None:
+            argv += ["--myocardium-label", str(images["myocardium_label"])]
+        argv += ["-o", tracked, *batch]
         steps.append(Step("track", "track", argv, [inputs.tracked_meshes, inputs.series],
                           [tracked], [],
                           f"{len(table.tracked)} subject(s) followed through their series"))  # fmt: skip
@@ -175,17 +179,32 @@ def plan_route(table: SubjectsTable, settings, model: RouteModel, inputs: RouteI
                 "-o", cycle, *batch]  # fmt: skip
         steps.append(Step("cycle-study", "cycle-study", argv, [tracked, corresponded], [cycle], [],
                           "every tracked frame transported to the atlas"))  # fmt: skip
-        if _comparable(table, model):
+        if model.formula is not None and _comparable(table, model):
             cycle_analysis = out / "cycle_analysis"
-            groups = cycle_analysis / "groups.csv"
-            argv = [cycle, "--groups", groups, "--tfce", "--permutations", str(model_settings["permutations"]),
-                    "--seed", str(model_settings["seed"])]  # fmt: skip
+            design = cycle_analysis / "design.csv"
+            argv = [cycle, *_model_argv(model, model_settings, design)]
             if has_landmarks:
                 argv += ["--aha", aha]
-            argv += ["-o", cycle_analysis]
-            steps.append(Step("cycle-analysis", "cycle-analyze", argv, [cycle, atlas_dir], [cycle_analysis], [],
-                              "the groups compared over the whole cycle",
-                              design=groups, design_from=cycle))  # fmt: skip
+            argv += ["-o", cycle_analysis, *_execution(settings, batch=False)]
+            steps.append(Step("cycle-analysis", "cycle-analyze", argv, [cycle, atlas_dir],
+                              [cycle_analysis], [], f"the model '{model.formula}' over the whole "
+                              "cycle (per frame, peak, time to peak, trajectory)",
+                              design=design, design_from=cycle))  # fmt: skip
+        if images["myocardium_label"] is not None and has_landmarks:
+            wall = out / "wall"
+            argv = [tracked, "--atlas", corresponded / "atlas.vtk", "--aha", aha, "-o", wall,
+                    *batch]  # fmt: skip
+            steps.append(Step("wall", "wall", argv, [tracked, corresponded, atlas_dir], [wall], [],
+                              "wall thickness, thickening and strain of the tracked subjects"))  # fmt: skip
+            if model.formula is not None and _comparable(table, model):
+                wall_analysis = out / "wall_analysis"
+                design = wall_analysis / "design.csv"
+                argv = [wall, *_model_argv(model, model_settings, design), "--measure",
+                        "thickening", "--aha", aha, "-o", wall_analysis,
+                        *_execution(settings, batch=False)]  # fmt: skip
+                steps.append(Step("wall-analysis", "cycle-analyze", argv, [wall, atlas_dir],
+                                  [wall_analysis], [], f"the model '{model.formula}' on the wall's "
+                                  "thickening over the cycle", design=design, design_from=wall))  # fmt: skip
     steps.append(Step("report", None, None, [s.writes[0] for s in steps], [out / "report.md"], [],
                       "report.md: the results, the flagged subjects, every setting"))  # fmt: skip
     return steps
@@ -212,8 +231,9 @@ MIN_PER_GROUP = 3
 
 def _comparable(table: SubjectsTable, model: RouteModel) -> bool:
     """Whether the tracked subjects make groups the cycle's analysis can compare (at least
-    :data:`MIN_PER_GROUP` in each of two groups or more)."""
+    :data:`MIN_PER_GROUP` in each of two groups or more; without groups, at least
+    :data:`MIN_PER_GROUP` more subjects than the model's columns)."""
     if len(model.groups) < 2:
-        return False
+        return len(table.tracked) >= len(model.columns) + 1 + MIN_PER_GROUP
     counts = [sum(e.covariates["group"] == g for e in table.tracked) for g in model.groups]
     return sum(c >= MIN_PER_GROUP for c in counts) >= 2

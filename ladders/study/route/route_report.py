@@ -10,7 +10,9 @@ is computed again, so a reused step reports as it did):
    wall-motion test is significant, the figures (maps and bull's-eyes); with a planted
    truth in the settings (a synthetic cohort), the detection power and Dice of every
    test against it.
-2. **The whole cycle**, when subjects were tracked: the cycle analysis's figures.
+2. **The whole cycle**, when subjects were tracked: the cycle analysis's summary (per
+   frame, peak, time to peak, trajectory) and figures; with the myocardium's label, the
+   wall's thickening likewise and where the wall maps are.
 3. **The subjects**: how many reached each step, and every subject left out or flagged,
    with the step and the reason.
 4. **The steps**: each command, whether it ran or was reused, its time and log.
@@ -38,9 +40,9 @@ _MAIN_METHOD = "pole_ladder_residual"
 
 
 def subjects_with_results(folder: Path) -> list[str]:
-    """The subjects with results in a study folder (or a cycle study's)."""
+    """The subjects with results in a study folder (or a cycle study's, or wall maps')."""
     folder = Path(folder)
-    if (folder / "cycle_study.csv").is_file():
+    if (folder / "cycle_study.csv").is_file() or (folder / "wall.csv").is_file():
         return sorted(p.stem for p in folder.glob("*.npz"))
     from ..population import load_transported_motion
 
@@ -84,6 +86,9 @@ def _stage_subjects(root: Path, table) -> dict:
     cycle = root / "cycle_study"
     if cycle.is_dir():
         stages["cycle-study"] = [s for s in names if (cycle / f"{s}.npz").is_file()]
+    wall = root / "wall"
+    if wall.is_dir():
+        stages["wall"] = [s for s in names if (wall / f"{s}.npz").is_file()]
     return stages
 
 
@@ -249,22 +254,31 @@ def _found(root: Path, settings) -> list[str]:
     return lines
 
 
-def _cycle(root: Path) -> list[str]:
-    folder = root / "cycle_analysis"
+def _summary_section(root: Path, folder: Path, title: str) -> list[str]:
+    """A cycle analysis's own summary (``cycle_summary.md``, its title dropped) and figures."""
     if not folder.is_dir():
         return []
-    lines = ["", "## The whole cycle", ""]
-    frames = _rows(folder / "cycle_frames.csv")
-    if frames:
-        column = next((c for c in frames[0] if c.startswith("vertices_p_fwer")), None)
-        if column:
-            found = [int(r[column]) for r in frames]
-            lines.append(f"Per frame (FWER over the vertices and frames): vertices found at "
-                         f"{sum(f > 0 for f in found)} of {len(found)} frames, at most "
-                         f"{max(found)} at one frame.")  # fmt: skip
+    lines = ["", f"## {title}", ""]
+    summary = folder / "cycle_summary.md"
+    if summary.is_file():
+        text = summary.read_text(encoding="utf-8").splitlines()
+        body = text[1:] if text and text[0].startswith("# ") else text
+        lines += [line.replace("## ", "### ", 1) if line.startswith("## ") else line
+                  for line in body]  # fmt: skip
     for fig in sorted(folder.glob("*.png")):
         lines += ["", f"![{fig.stem}]({_link(root, fig)})"]
     lines += ["", f"Tables and maps: `{_link(root, folder)}/`."]
+    return lines
+
+
+def _cycle(root: Path) -> list[str]:
+    lines = _summary_section(root, root / "cycle_analysis", "The whole cycle")
+    wall = root / "wall"
+    lines += _summary_section(root, root / "wall_analysis", "The wall's thickening")
+    if (wall / "wall_segments.csv").is_file():
+        lines += ["", f"Every tracked subject's wall thickness, thickening and strain per AHA "
+                  f"segment: `{_link(root, wall / 'wall_segments.csv')}`; per vertex: "
+                  f"`{_link(root, wall / 'maps')}/`."]  # fmt: skip
     return lines
 
 

@@ -111,8 +111,6 @@ def _write_design(step: Step, table, model, settings) -> None:
     columns = list(dict.fromkeys(
         [*model.columns, *(c for c in (s["blocks"], *(s["outcome"] or ())) if c)]
     ))  # fmt: skip
-    if step.name == "cycle-analysis":
-        columns = ["group"]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(["subject", *columns])

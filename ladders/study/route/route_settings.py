@@ -70,6 +70,13 @@ SETTINGS: dict[str, dict[str, _Key]] = {
             "about the long axis and place the AHA segments",
             optional=True,
         ),  # fmt: skip
+        "myocardium_label": _Key(
+            "int",
+            None,
+            "the left ventricle's myocardium label: the tracked subjects' wall "
+            "thickness, thickening and strain",
+            optional=True,
+        ),  # fmt: skip
         "vertices": _Key("int", 1000, "vertices of every mesh (the atlas has as many)"),
         "valve_planes": _Key(
             "path",
@@ -255,9 +262,13 @@ def _check_ranges(path: Path, v: dict) -> None:
     for section, key, low in positive:
         if v[section][key] < low:
             _fail(path, f"{section}.{key}", f"expected at least {low}, got {v[section][key]}")
-    rv = v["images"]["rv_label"]
-    if rv is not None and rv in (0, v["images"]["label"]):
-        _fail(path, "images.rv_label", f"{rv}: must differ from images.label and from 0")
+    labels = {"images.label": v["images"]["label"]}
+    for key in ("rv_label", "myocardium_label"):
+        value = v["images"][key]
+        if value is not None and (value == 0 or value in labels.values()):
+            _fail(path, f"images.{key}", f"{value}: must differ from 0 and from "
+                                         f"{', '.join(labels)}")  # fmt: skip
+        labels[f"images.{key}"] = value
     if not v["transport"]["alpha2"] > 0:
         _fail(
             path, "transport.alpha2", f"expected a positive number, got {v['transport']['alpha2']}"
