@@ -86,7 +86,13 @@ def test_a_cohort_is_converted_into_the_atlas_unit(cohort):
     with pytest.raises(UnitsError, match="far from the atlas's pose"):
         check_cohort_units(moved)
     _, report = check_cohort_units(moved, allow_pose=True)
-    assert len(report.accepted_pose) == 6
+    # the ED meshes are placed against the atlas, the ES meshes against their ED (moved too)
+    assert report.accepted_pose == [f"{s.name}:ed" for s in cohort.subjects]
+    es_alone = Cohort(cohort.atlas, cohort.faces, [
+        type(s)(s.name, s.ed, s.es + [400.0, 0, 0]) for s in cohort.subjects
+    ])  # fmt: skip
+    _, report = check_cohort_units(es_alone, allow_pose=True)
+    assert report.accepted_pose == [f"{s.name}:es" for s in cohort.subjects]
 
 
 def test_the_meshes_of_an_atlas_are_read_in_the_unit_of_the_median_mesh(cohort, tmp_path):

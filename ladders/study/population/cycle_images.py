@@ -45,13 +45,13 @@ import numpy as np
 from ..errors import CohortError
 from ..imaging.cine import TagGrid, write_series
 from ..imaging.plane_table import PLANES_FILE, write_plane_table
-from ..imaging.voxelize import short_axis_affine
 from ..meshes.mesh_io import write_mesh
 from ..preparation.landmarks import LANDMARKS_FILE, write_landmarks
 from ..preparation.synthetic_landmarks import synthetic_landmarks
 from ..tracking.base_planes import rim_plane
 from ..volume import boundary_vertices
 from .covariate_cohort import CovariateCohort, write_covariate_cohort
+from .cycle_grid import cycle_grid
 from .image_cohort import subjects_table, with_rv_label, write_run_files
 from .two_groups import write_two_group_cohort
 
@@ -69,7 +69,6 @@ VALVE_PLANES_FILE = PLANES_FILE
 
 #: What :func:`write_cycle_cohort` renders into ``images/``.
 IMAGE_KINDS = ("labels", "cine", "none")
-_MARGIN, _ABOVE_BASE = 15.0, 8.0
 
 
 def valve_planes(frames, faces) -> np.ndarray:
@@ -110,19 +109,6 @@ def cycle_valve_planes(cycles) -> dict:
     return {name: {str(t): [float(x) for x in plane]
                    for t, plane in enumerate(valve_planes(cycles.frames[i], cycles.faces))}
             for i, name in enumerate(cycles.names)}  # fmt: skip
-
-
-def cycle_grid(ed, in_plane: float = 1.5, thickness: float = 8.0) -> tuple[np.ndarray, tuple]:
-    """The affine ``(4, 4)`` and shape of a short-axis stack over an ED surface ``(k, 3)``."""
-    for name, value in (("in_plane", in_plane), ("thickness", thickness)):
-        if not (np.isfinite(value) and value > 0):
-            raise CohortError(f"{name}: expected a voxel size > 0 mm, got {value!r}")
-    ed = np.asarray(ed, dtype=float)
-    low = ed.min(axis=0) - _MARGIN
-    high = ed.max(axis=0) + np.array([_MARGIN, _MARGIN, _ABOVE_BASE])
-    spacing = np.array([in_plane, in_plane, thickness])
-    shape = tuple(int(n) for n in np.ceil((high - low) / spacing))
-    return short_axis_affine(low, in_plane, thickness), shape
 
 
 def write_cycle_cohort(

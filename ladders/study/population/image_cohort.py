@@ -30,6 +30,7 @@ import numpy as np
 from ..errors import CohortError
 from ..imaging import add_rv_label, voxelize, write_label_image
 from ..preparation.synthetic_landmarks import synthetic_landmarks
+from .cycle_grid import cycle_grid
 
 __all__ = ["LABELS", "write_image_cohort", "write_run_files", "subjects_table", "with_rv_label",
            "SUBJECTS_FILE", "SETTINGS_FILE"]  # fmt: skip
@@ -74,7 +75,6 @@ def _pair(folder: Path, name: str, ed, es, faces, spacing: float, thickness: flo
 
 def _cycle_images(folder: Path, cycles, i: int, series: bool, in_plane, thickness) -> list[str]:
     from ..imaging.cine import write_series
-    from .cycle_images import cycle_grid
 
     name = cycles.names[i]
     ed = cycles.frames[i, 0]

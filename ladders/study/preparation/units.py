@@ -7,15 +7,17 @@ on the pose). A size ratio ``r = size(mesh) / size(atlas)`` more than
 (``|log10 r - round(log10 r)| < 0.3``) it names the likely unit: ``r ~ 0.001``
 for an atlas in mm means the mesh is in metres. Its pose is far from the
 atlas's when the centroids are further apart than ``max_offset`` atlas sizes
-(default 0.75) or it is turned by more than ``max_angle`` degrees (default 45) by
+(default 0.6; a subject's ED mesh against the atlas, its other phases, whose centroid
+moves with the contraction, against its ED) or it is turned by more than
+``max_angle`` degrees (default 45) by
 :func:`~.pose_angle.pose_angle`: the rotation of the least-squares rigid fit of its
 vertices onto the atlas's when it has the atlas's triangulation (a cohort in
 correspondence), else the misfit of the whole second-moment tensors as an angle. Both
 are defined for a near-round mesh, whose principal axis (largest variance) is not: the
 angle between principal axes is not used. On 10 synthetic cohorts of 45 subjects
-(``benchmarks/bench_pose_check.py``) no unposed mesh is refused, while every mesh
-turned by 90 degrees across its long axis (in correspondence) and every mesh moved
-by one atlas size across it is.
+(``benchmarks/bench_pose_check.py``) no unposed subject is refused, while every subject
+turned by 90 degrees across its long axis (in correspondence) and every subject (or ES
+mesh alone) moved by one atlas size, across the long axis or along it, is.
 
 :func:`check_units_and_pose` raises a :class:`UnitsError` naming every such
 mesh, its size, the atlas's and the likely unit, unless told what to do:
@@ -111,7 +113,9 @@ class MeshSize:
     likely_unit : str or None
         The unit the ratio suggests, when it is near a power of ten other than 1.
     offset : float
-        Distance between the centroids, in atlas sizes (the mesh in the unit assumed).
+        Distance between the centroids, in atlas sizes (the mesh in the unit assumed): to
+        the atlas's, or for a mesh of another phase than ED whose subject has an ED mesh, to
+        that ED mesh's (``offset_from``).
     angle : float
         How far it is turned from the atlas, in degrees (:func:`~.pose_angle.pose_angle`).
     measure : str
@@ -125,6 +129,7 @@ class MeshSize:
     offset: float
     angle: float
     measure: str = "moments"
+    offset_from: str = "atlas"
 
 
 @dataclass
@@ -278,7 +283,8 @@ def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str, reference: 
         unit = f"; likely in {s.likely_unit}" if s.likely_unit else ""
         lines.append(
             f"  {s.name}: size {s.size:.4g} (ratio {s.ratio:.3g}{unit}), centroid offset "
-            f"{s.offset:.2f} atlas sizes, turned {s.angle:.0f} degrees ({MEASURES[s.measure]})"
+            f"{s.offset:.2f} atlas sizes{'' if s.offset_from == 'atlas' else ' from its ED'}, "
+            f"turned {s.angle:.0f} degrees ({MEASURES[s.measure]})"
         )
     if len(bad) > 20:
         lines.append(f"  ... and {len(bad) - 20} more")
@@ -286,12 +292,21 @@ def _message(bad: list[MeshSize], atlas_size, atlas_unit, what: str, reference: 
 
 
 def _disagreements(report: UnitsReport, centroids, atlas_centroid, max_offset, max_angle):
-    """Set the offsets (in the atlas's unit); the meshes of another scale, and those far away."""
+    """Set the offsets (in the atlas's unit); the meshes of another scale, and those far away.
+
+    A subject's ED mesh is placed against the atlas; its other phases (ES), whose centroid
+    moves with the contraction, against its ED mesh: a subject moved as a whole is caught
+    by its ED, a phase moved alone by its distance to its ED."""
     factor = {s.name: report.factors[s.name.split(":")[0]] for s in report.meshes}
-    for s, centroid in zip(report.meshes, centroids):
-        s.offset = float(
-            np.linalg.norm(centroid * factor[s.name] - atlas_centroid) / report.atlas_size
-        )
+    placed = {s.name: c * factor[s.name] for s, c in zip(report.meshes, centroids)}
+    for s in report.meshes:
+        subject, _, phase = s.name.partition(":")
+        ed = placed.get(f"{subject}:ed")
+        if phase != "ed" and ed is not None:
+            s.offset = float(np.linalg.norm(placed[s.name] - ed) / report.atlas_size)
+            s.offset_from = "ed"
+        else:
+            s.offset = float(np.linalg.norm(placed[s.name] - atlas_centroid) / report.atlas_size)
     scale = [
         s for s in report.meshes if abs(np.log10(s.ratio * factor[s.name])) >= _SCALE_TOLERANCE
     ]
@@ -312,7 +327,7 @@ def check_units_and_pose(
     units=None,
     allow_scale: bool = False,
     allow_pose: bool = False,
-    max_offset: float = 0.75,
+    max_offset: float = 0.6,
     max_angle: float = 45.0,
     reference: str = "the atlas",
 ) -> UnitsReport:
@@ -330,8 +345,9 @@ def check_units_and_pose(
         or ``"auto"`` (the detected unit of each subject).
     allow_scale, allow_pose : bool
         Accept size (pose) disagreements instead of raising.
-    max_offset : float, default 0.75
-        Centroid distance, in atlas sizes, beyond which a pose is far.
+    max_offset : float, default 0.6
+        Centroid distance, in atlas sizes, beyond which a pose is far: an ED mesh's (or a
+        mesh without an ED) from the atlas's, another phase's from its subject's ED.
     max_angle : float, default 45
         Turn from the atlas's orientation (:func:`~.pose_angle.pose_angle`), in degrees,
         beyond which a pose is far.
