@@ -213,6 +213,37 @@ def test_matches_the_all_pairs_definition_on_irregular_surfaces():
             np.testing.assert_allclose(result.distance[hit], expected[hit], rtol=0, atol=1e-9)
 
 
+def _sphere_with_a_lid(radius: float, height: float):
+    """An icosphere cut above ``height`` and closed by a fan: a few large triangles, as the
+    flat lid a label image leaves at the base."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=radius)
+    v, f = np.array(sphere.vertices), np.array(sphere.faces)
+    f = f[~(v[f][:, :, 2] > height).all(axis=1)]
+    edges = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    key = {tuple(e) for e in edges}
+    rim = [e for e in edges if (e[1], e[0]) not in key]
+    centre = len(v)
+    v = np.vstack([v, v[np.unique(np.ravel(rim))].mean(axis=0)])
+    return v, np.vstack([f, [[b, a, centre] for a, b in rim]])
+
+
+def test_large_triangles_lose_no_hit():
+    """A lid of large triangles is paired with every line: same answer as every pair."""
+    tv, tf = _sphere_with_a_lid(30.0, 18.0)
+    a, b, c = (tv[tf[:, i]] for i in range(3))
+    centre = (a + b + c) / 3
+    radius = np.sqrt(np.max([((p - centre) ** 2).sum(1) for p in (a, b, c)], axis=0))
+    assert (radius > 4 * np.median(radius)).sum() >= 5  # the pruning's large class is used
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=26.0)
+    v, f = np.array(sphere.vertices), np.array(sphere.faces)
+    for limit in (10.0, 40.0):
+        result = normal_wall_motion(v, f, tv, tf, max_distance=limit)
+        expected, hit = _brute_force(v, f, tv, tf, limit)
+        np.testing.assert_array_equal(result.hit, hit)
+        np.testing.assert_allclose(result.distance[hit], expected[hit], rtol=0, atol=1e-9)
+        assert (np.linalg.norm(result.points[hit], axis=1) < 28.0).any()  # some met the lid
+
+
 def test_bad_arguments_are_named():
     v, f = _sphere(10.0, 1)
     with pytest.raises(ValueError, match="max_distance"):

@@ -104,6 +104,33 @@ def _candidates(origins, directions, centres, reach, max_distance, budget=200_00
     return codes // n_tri, codes % n_tri
 
 
+#: A triangle whose bounding radius exceeds this many times the median is "large" (the flat
+#: lid a label image leaves at the base is a fan of such triangles).
+_LARGE = 4.0
+
+
+def _pairs(origins, directions, centres, radius, margin, max_distance):
+    """Candidate ``(line, triangle)`` pairs, sorted by line then triangle (exact).
+
+    The few large triangles of a mesh would make every ball of :func:`_candidates` as
+    large as theirs: they are paired with every line instead, and the pruning runs on
+    the others with their own reach. A mesh with more than a tenth of its triangles
+    large is pruned as one class.
+    """
+    large = radius > _LARGE * float(np.median(radius)) if len(radius) else radius > 0
+    if not large.any() or large.mean() > 0.1:
+        reach = float(radius.max(initial=0.0)) * (1.0 + 1e-6) + margin
+        return _candidates(origins, directions, centres, reach, max_distance)
+    small = np.flatnonzero(~large)
+    reach = float(radius[small].max()) * (1.0 + 1e-6) + margin
+    lines, tris = _candidates(origins, directions, centres[small], reach, max_distance)
+    big = np.flatnonzero(large)
+    lines = np.concatenate([lines, np.repeat(np.arange(len(origins)), len(big))])
+    tris = np.concatenate([small[tris], np.tile(big, len(origins))])
+    order = np.lexsort((tris, lines))
+    return lines[order], tris[order]
+
+
 def _line_hits(origins, directions, tv, tf, max_distance, chunk=200_000):
     """Intersections of the lines ``origins + t directions`` with the triangles (Moller-Trumbore).
 
@@ -115,8 +142,8 @@ def _line_hits(origins, directions, tv, tf, max_distance, chunk=200_000):
     a, b, c = tv[tf[:, 0]], tv[tf[:, 1]], tv[tf[:, 2]]
     centres = (a + b + c) / 3.0
     radius = np.sqrt(np.max([((p - centres) ** 2).sum(1) for p in (a, b, c)], axis=0))
-    reach = float(radius.max()) * (1.0 + 1e-6) + 1e-12 * float(np.abs(tv).max(initial=1.0))
-    lines, tris = _candidates(origins, directions, centres, reach, max_distance)
+    margin = 1e-12 * float(np.abs(tv).max(initial=1.0))
+    lines, tris = _pairs(origins, directions, centres, radius, margin, max_distance)
     out = []
     for s in range(0, len(lines), chunk):
         i, j = lines[s : s + chunk], tris[s : s + chunk]
