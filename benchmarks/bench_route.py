@@ -5,8 +5,8 @@
 Two cohorts of ``make_covariate_cohort`` are written as a user holds them
 (``symladders cohort --images labels``' writer: label images of 1.5 mm voxels with a
 right-ventricle label, ``subjects.csv`` with group, age, sex and body size,
-``study.toml``), with an age confound: the patients are older (imbalance 1: two
-standard deviations of age) and age reduces every subject's contraction (10 % per
+``study.toml``), with an age confound: the patients are older and larger (``--imbalance`` 1: two
+standard deviations of age and body size) and age reduces every subject's contraction (10 % per
 standard deviation). The first has the default hypokinesia planted in the patients;
 the second none (the null). Each goes through ``symladders run study.toml`` with the
 recommended settings, as written.
@@ -64,11 +64,11 @@ ADJUSTED = "group + age + sex + body_size"
 CONTRAST = "group[patients] - group[controls]"
 
 
-def _cohort(folder: Path, n: int, effect: bool, seed: int) -> Path:
+def _cohort(folder: Path, n: int, effect: bool, seed: int, imbalance: float) -> Path:
     abnormality = MotionAbnormality() if effect else None
     data = make_covariate_cohort(
         [n // 2, n - n // 2], (("controls", None), ("patients", abnormality)),
-        Covariates(age_effect=0.1, imbalance=1.0), seed=seed,
+        Covariates(age_effect=0.1, imbalance=imbalance), seed=seed,
     )  # fmt: skip
     write_image_cohort(data, folder, spacing=1.5)
     return folder / "study.toml"
@@ -151,6 +151,12 @@ def main(argv=None) -> None:
     parser.add_argument("--draws", type=int, default=200, help="null designs drawn")
     parser.add_argument("--null-permutations", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--imbalance",
+        type=float,
+        default=1.0,
+        help="the patients' shift of age and body size (Covariates)",
+    )
     parser.add_argument("--work", type=Path, default=None, help="scratch folder (default: temp)")
     parser.add_argument("--publish", action="store_true")
     args = parser.parse_args(argv)
@@ -161,7 +167,9 @@ def main(argv=None) -> None:
             folder = work / name
             settings = folder / "study.toml"
             if not settings.is_file():
-                _cohort(folder, args.subjects, effect, args.seed + (0 if effect else 1))
+                _cohort(
+                    folder, args.subjects, effect, args.seed + (0 if effect else 1), args.imbalance
+                )
             timing[name] = _run(settings)
             print(f"{name}: symladders run in {timing[name][0]:.0f} s", flush=True)
         rerun, out = _run(work / "effect" / "study.toml")
@@ -173,9 +181,15 @@ def main(argv=None) -> None:
             rows[label] = _scores(results, truth, formula, 10000)
         null = _null_rate(work / "null", args.draws, args.null_permutations, args.seed)
         record = json.loads((results / "run.json").read_text())
+        design = _design(work / "effect")
+        patients = np.array([g == "patients" for g in design["group"]], float)
+        corr = {c: float(np.corrcoef(patients, np.array(design[c], float))[0, 1])
+                for c in ("age", "body_size")}  # fmt: skip
     lines = [
         f"{args.subjects} subjects (half patients with the planted hypokinesia of segments 7, "
-        "8, 13, 14), older patients (imbalance 1) and age reducing the contraction (10 % per "
+        f"8, 13, 14), older and larger patients (imbalance {args.imbalance:g}: correlation of the "
+        f"group with age {corr['age']:.2f}, with body size {corr['body_size']:.2f}) and age "
+        "reducing the contraction (10 % per "
         "SD), label images of 1.5 mm voxels with an RV label; `symladders run study.toml` as "
         "written (1,000-vertex meshes, alpha^2 = 100, 10,000 permutations, TFCE). Normal wall "
         "motion, pole ladder with residuals, read from the run's `analysis/model_vertices.csv`.",
@@ -196,8 +210,9 @@ def main(argv=None) -> None:
         "",
         f"Null FWER: {args.draws} designs of the null cohort's study with the group labels "
         "drawn anew, the age confound kept (logistic in age), "
-        f"{args.null_permutations} permutations each; exact binomial intervals. The run took "
-        f"{timing['effect'][0]:.0f} s ({steps}; {machine()}, load "
+        f"{args.null_permutations} permutations each; exact binomial intervals. The run's "
+        f"steps took {sum(v.get('seconds', 0.0) for v in record['steps'].values()):.0f} s "
+        f"({steps}; {machine()}, load "
         f"{os.getloadavg()[0]:.1f} at the end); the second run {rerun:.0f} s, "
         + ("every step reused." if reused else "NOT every step reused."),
     ]
