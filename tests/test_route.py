@@ -174,3 +174,20 @@ def test_the_tutorial_names_what_the_route_wrote(route):
     assert "analysis/model_vertices.csv" in expected and "tracked/*/frame_*.vtk" in expected
     absent = missing(folder / "study_results", expected)
     assert not absent, f"named in {TUTORIAL.name} but not written by the route: {absent}"
+
+
+def test_the_report_reads_each_study_once(route, monkeypatch):
+    """A rerun of the report reads the study's results once for the analysis's design and
+    once for the report, not once per subject."""
+    from ladders.study.route import route_report
+
+    folder, *_ = route
+    calls = []
+    real = route_report.subjects_with_results
+    monkeypatch.setattr(route_report, "subjects_with_results",
+                        lambda path: calls.append(path) or real(path))  # fmt: skip
+    status, out, err = run_cli("run", folder / "study.toml", "--redo", "report")
+    assert status in (0, 1), out + err
+    assert (folder / "study_results" / "report.md").is_file()
+    studies = [p for p in calls if p.name == "study"]  # the design's read and the report's
+    assert len(studies) <= 2, f"the study folder read {len(studies)} times"

@@ -75,7 +75,8 @@ def _stage_subjects(root: Path, table) -> dict:
         stages["correspond"] = [s for s in names if any(corresponded.glob(f"{s}_es.*"))]
     study = root / "study"
     if (study / "results").is_dir():
-        stages["study"] = [s for s in names if s in set(subjects_with_results(study))]
+        studied = set(subjects_with_results(study))  # read once, not once per subject
+        stages["study"] = [s for s in names if s in studied]
     design = root / "analysis" / "design.csv"
     if design.is_file():
         stages["analysis"] = [r["subject"] for r in _rows(design)]
@@ -112,11 +113,12 @@ def _reasons(root: Path) -> dict:
     return out
 
 
-def left_out_subjects(root: Path, table) -> list[tuple[str, str, str]]:
+def left_out_subjects(root: Path, table, stages: dict | None = None) -> list[tuple[str, str, str]]:
     """``(subject, step, reason)`` of every subject a step did not pass on, and every mesh the
-    correspondence flagged for inspection (kept, with its reasons)."""
+    correspondence flagged for inspection (kept, with its reasons). ``stages``: the subjects
+    out of each step, when already read."""
     root = Path(root)
-    stages = _stage_subjects(root, table)
+    stages = _stage_subjects(root, table) if stages is None else stages
     reasons = _reasons(root)
     order = ["table", "mesh", "correspond", "study", "analysis"]
     out, gone = [], set()
@@ -287,7 +289,7 @@ def _subjects(root: Path, table) -> list[str]:
     lines = ["", "## The subjects", "", "| " + " | ".join(stages) + " |",
              "|" + "---:|" * len(stages), "| " + " | ".join(str(len(v)) for v in stages.values())
              + " |", ""]  # fmt: skip
-    left = left_out_subjects(root, table)
+    left = left_out_subjects(root, table, stages)
     if left:
         lines += ["Left out or flagged:", "", "| subject | step | reason |", "|---|---|---|"]
         lines += [f"| {s} | {step} | {reason.replace('|', '/')} |" for s, step, reason in left]
