@@ -51,6 +51,12 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def _output(argv) -> str:
+    """A step's output folder (``-o``): its key (two steps may run one program)."""
+    argv = [str(a) for a in argv]
+    return argv[argv.index("-o") + 1] if "-o" in argv else " ".join(argv)
+
+
 def _reset_peak() -> bool:
     """Reset this process's peak resident set (Linux: ``clear_refs`` 5); False elsewhere."""
     try:
@@ -110,7 +116,7 @@ def main(argv=None) -> None:
             status = symladders(argv)
             seconds = time.perf_counter() - start
             peaks = client.run(_resident_peak_mb)
-            measured[argv[0]] = {
+            measured[_output(argv)] = {
                 "seconds": seconds, "load": os.getloadavg()[0],
                 "worker_mb": max(peaks.values()),
                 "main_mb": max(_peak_mb(), main_before),
@@ -126,7 +132,8 @@ def main(argv=None) -> None:
         record = json.loads((Path(outcome.settings.output) / "run.json").read_text())
     counts = {"mesh": args.subjects, "atlas": min(args.subjects, 50), "correspond": args.subjects,
               "track": args.series, "study": args.subjects, "analyze": args.subjects,
-              "cycle-study": args.series, "cycle-analyze": args.series}  # fmt: skip
+              "cycle-study": args.series, "cycle-analyze": args.series, "wall": args.series,
+              "wall-analysis": args.series}  # fmt: skip
     lines = [
         f"{args.subjects} subjects of the whole-cycle cohort as short-axis label stacks (1.5 x "
         f"1.5 x 8 mm, RV label), {args.series} of them as {args.frames}-frame series; "
@@ -142,10 +149,10 @@ def main(argv=None) -> None:
     total_ed_es = 0.0
     per_subject_ed_es = 0.0
     for step in outcome.steps:
-        if step.program is None or step.program not in measured:
+        if step.argv is None or _output(step.argv) not in measured:
             continue
-        m = measured[step.program]
-        n = counts.get(step.program, args.subjects)
+        m = measured[_output(step.argv)]
+        n = counts.get(step.name, counts.get(step.program, args.subjects))
         lines.append(
             f"| {step.name} | {n} | {m['seconds']:.0f} s | {m['seconds'] / n:.2f} | "
             f"{m['seconds'] * args.workers / n:.2f} | {m['worker_mb']:.0f} MB | "
@@ -155,7 +162,8 @@ def main(argv=None) -> None:
             total_ed_es += m["seconds"]
             if step.name != "atlas":
                 per_subject_ed_es += m["seconds"] / n
-    atlas = measured.get("atlas", {}).get("seconds", 0.0)
+    atlas = next((measured[_output(s.argv)]["seconds"] for s in outcome.steps
+                  if s.name == "atlas" and _output(s.argv) in measured), 0.0)  # fmt: skip
     projected = atlas + 1000 * per_subject_ed_es
     lines += ["", f"The ED/ES route took {total_ed_es / 60:.1f} min for {args.subjects} subjects; "
               f"extrapolated to 1,000 subjects (the atlas from its subset as measured, the other "
