@@ -57,17 +57,19 @@ from ladders.study.tracking import identity_bspline, image_from_array, track_cin
 N_FRAMES = 25
 
 
-def _best_bspline(frame, affine, shape, params, ed, f, near):
+def best_bspline(frame, affine, shape, params, ed, f):
     """Least-squares B-spline of the true motion on the tracking's control grid.
 
-    Returns the ED vertices and the points ``near`` moved by it."""
+    Sampled at voxel centres about 3 mm apart (every second voxel of 1.5 mm, every
+    slice of 8 mm). Returns the ``SimpleITK.BSplineTransform``."""
     import SimpleITK as sitk
 
     transform = identity_bspline(image_from_array(frame, affine), SETTINGS.control_point_spacing)
     n_params = transform.GetNumberOfParameters()
-    sample = [int(shape[0] // 2), int(shape[1] // 2), int(shape[2])]
-    sample_affine = affine @ np.diag([2.0, 2.0, 1.0, 1.0])  # the grid is axis-aligned
-    step = np.diag(sample_affine)[:3].tolist()
+    step = np.maximum(1, np.round(3.0 / np.abs(np.diag(affine)[:3]))).astype(int)
+    sample = [int(shape[i] // step[i]) for i in range(3)]
+    sample_affine = affine @ np.diag([*step, 1.0])  # the grid is axis-aligned
+    spacing = np.diag(sample_affine)[:3].tolist()
     origin = affine[:3, 3].tolist()
     basis = []
     for k in range(n_params // 3):  # the x-coefficients' basis; y and z share it
@@ -75,7 +77,7 @@ def _best_bspline(frame, affine, shape, params, ed, f, near):
         p[k] = 1.0
         transform.SetParameters(tuple(p))
         field = sitk.TransformToDisplacementField(
-            transform, sitk.sitkVectorFloat64, sample, origin, step, [1, 0, 0, 0, 1, 0, 0, 0, 1]
+            transform, sitk.sitkVectorFloat64, sample, origin, spacing, [1, 0, 0, 0, 1, 0, 0, 0, 1]
         )
         basis.append(sitk.GetArrayFromImage(field)[..., 0].transpose(2, 1, 0).reshape(-1))
     b = np.stack(basis, 1)
@@ -84,10 +86,33 @@ def _best_bspline(frame, affine, shape, params, ed, f, near):
     w = np.where(cKDTree(ed).query(x)[0] < 15.0, 1.0, 0.01)
     coef = [np.linalg.lstsq(b * w[:, None], (y - x)[:, d] * w, rcond=None)[0] for d in range(3)]
     transform.SetParameters(tuple(np.concatenate(coef)))
-    return tuple(
-        np.array([transform.TransformPoint(tuple(map(float, p))) for p in points])
-        for points in (ed, near)
-    )
+    return transform
+
+
+def moved(transform, points) -> np.ndarray:
+    """``points`` (k, 3) moved by a SimpleITK transform."""
+    return np.array([transform.TransformPoint(tuple(map(float, p))) for p in points])
+
+
+def _best_bspline(frame, affine, shape, params, ed, f, near):
+    """The ED vertices and the points ``near`` moved by :func:`best_bspline`."""
+    transform = best_bspline(frame, affine, shape, params, ed, f)
+    return moved(transform, ed), moved(transform, near)
+
+
+def wall_metric(ed_frame, frame, affine, near):
+    """The metric near the wall: ``mapped`` (the points ``near`` moved to ``frame``) -> the
+    mean squared difference between ``ed_frame`` at ``near`` and ``frame`` at ``mapped``
+    (linear interpolation)."""
+    inverse = np.linalg.inv(affine[:3, :3])
+    ed_values = map_coordinates(ed_frame, ((near - affine[:3, 3]) @ inverse.T).T, order=1)
+
+    def metric(mapped) -> float:
+        j = (mapped - affine[:3, 3]) @ inverse.T
+        values = map_coordinates(frame, j.T, order=1, mode="nearest")
+        return float(np.mean((values - ed_values) ** 2))
+
+    return metric
 
 
 def cylindrical_error(moved, truth, ed) -> tuple[float, float]:
@@ -108,7 +133,6 @@ def run() -> list[tuple]:
     voxels = voxel_centres(affine, shape)
     settings = replace(SETTINGS, reference="ed", combine="forward")
     near = voxels[cKDTree(ed).query(voxels)[0] < settings.mask_distance]  # the metric's voxels
-    inverse = np.linalg.inv(affine[:3, :3])
     uniform = dataclasses.replace(params, contraction_heterogeneity=0.0)  # same ED shape
     cases = (("yes", TagGrid(), params, ("central_difference", "gaussian")),
              ("no", None, params, ("central_difference", "gaussian")),
@@ -119,12 +143,7 @@ def run() -> list[tuple]:
         series = np.stack([render_cine(p, affine, shape, f, rng, noise=0.02,
                                        tagging=tagging, supersample=2)
                            for f in fractions[: es + 1]])  # fmt: skip
-        ed_frame = map_coordinates(series[0], ((near - affine[:3, 3]) @ inverse.T).T, order=1)
-
-        def metric(mapped, frame=series[es], ed_frame=ed_frame):
-            j = (mapped - affine[:3, 3]) @ inverse.T
-            return float(np.mean((map_coordinates(frame, j.T, order=1, mode="nearest")
-                                  - ed_frame) ** 2))  # fmt: skip
+        metric = wall_metric(series[0], series[es], affine, near)
 
         truth_es = motion_forward(p, ed, fractions[es])
         points = np.concatenate([ed, near])

@@ -295,15 +295,18 @@ def test_the_metric_samples_only_the_mask():
 
 
 @pytest.mark.parametrize("reference", ["consecutive", "ed"])
-def test_registrations_in_parallel_give_the_same_tracking(reference):
+@pytest.mark.parametrize("affine_stage", [False, True])
+def test_registrations_in_parallel_give_the_same_tracking(reference, affine_stage):
     """``jobs`` runs the independent registrations of a series at a time: the same result
-    (bit for bit, one thread each), and the same stored-result key."""
+    (bit for bit, one thread each), and the same stored-result key; with the affine
+    stage too (its composite transforms cross the processes), which follows the shift."""
 
     fixed, moving, affine = _blobs(SHIFT)
     points = np.random.default_rng(7).uniform(-6.0, 6.0, size=(10, 3))
     series = np.stack([fixed, moving, fixed])
-    settings = replace(BLOB_SETTINGS, reference=reference)
+    settings = replace(BLOB_SETTINGS, reference=reference, affine_stage=affine_stage)
     serial = track_cine(series, affine, points, settings)
+    assert np.abs(serial[1] - points - SHIFT).max() < 0.5
     parallel = replace(settings, jobs=2)
     np.testing.assert_array_equal(track_cine(series, affine, points, parallel), serial)
     assert parallel.key() == settings.key()
@@ -311,6 +314,10 @@ def test_registrations_in_parallel_give_the_same_tracking(reference):
     assert replace(settings, reference="ed" if reference != "ed" else "consecutive").key() != (
         settings.key()
     )
+    assert replace(settings, affine_stage=not affine_stage).key() != settings.key()
+    # the affine stage's iterations enter the key with the stage only
+    more = replace(settings, affine_iterations=settings.affine_iterations + 1)
+    assert (more.key() != settings.key()) == affine_stage
 
 
 def test_a_flipped_grid_tracks_in_its_world_frame():
@@ -423,6 +430,8 @@ def test_a_rotation_of_tags_is_recovered_unless_the_gradient_is_smoothed_by_the_
         ("smoothing_sigmas", (1.0,)),
         ("sampling_percentage", 1.5),
         ("jobs", 0),
+        ("affine_stage", "yes"),
+        ("affine_iterations", 0),
     ],
 )
 def test_bad_settings_name_the_field(field, value):

@@ -113,6 +113,11 @@ def add_track_parser(sub) -> None:
                    help="with --cine: the moving image's gradient in the metric's derivative: "
                         "central differences (default) or ITK's Gaussian derivative, whose sigma "
                         "is the largest voxel spacing (the slice thickness of a short-axis stack)")  # fmt: skip
+    p.add_argument("--affine-stage", action="store_true",
+                   help="with --cine: fit an affine transform before each B-spline, which then "
+                        "refines it; recovers the shortening along the long axis that plain "
+                        "(untagged) images leave out, above all on isotropic grids (default: "
+                        "the B-spline alone)")  # fmt: skip
     p.add_argument("--registration-jobs", type=jobs_count, default=1, metavar="N",
                    help="with --cine: registrations of a subject run N at a time (processes; the "
                         "same result whatever N; with --reference ed, the two halves of the "
@@ -176,6 +181,7 @@ def run_track_command(args) -> int:
                 if args.mask_distance is None
                 else args.mask_distance or None,
                 image_gradient=args.image_gradient,
+                affine_stage=args.affine_stage,
                 jobs=(os.cpu_count() or 1)
                 if args.registration_jobs == -1
                 else args.registration_jobs,

@@ -2,7 +2,8 @@
 
 Two schemes (``CineTrackingSettings.reference``), with SimpleITK's free-form
 deformation (a cubic B-spline transform on a grid of control points
-``control_point_spacing`` mm apart):
+``control_point_spacing`` mm apart; with ``affine_stage``, on top of an affine transform
+fitted first, :mod:`.cine_registration`):
 
 * ``"ed"`` (default): every frame ``t`` is registered to end-diastole (ED) directly,
   the B-spline started from the transform fitted at the neighbouring frame, along two
@@ -60,10 +61,11 @@ from .cine_images import (
     _check_volume,
     _grid_affine,
     _mask_image,
-    _sitk,
     image_from_array,
     wall_mask,
 )
+from .cine_registration import identity_bspline
+from .cine_registration import register_images as _register
 from .cine_settings import CineTrackingSettings
 
 __all__ = [
@@ -74,95 +76,6 @@ __all__ = [
     "wall_mask",
     "identity_bspline",
 ]
-
-
-def identity_bspline(image, control_point_spacing: float):
-    """The identity cubic B-spline transform on the control grid the registrations use.
-
-    The grid covers ``image``'s extent with ``round(extent / control_point_spacing)``
-    intervals per axis (at least one).
-
-    Parameters
-    ----------
-    image : SimpleITK.Image
-        The fixed image (:func:`image_from_array`).
-    control_point_spacing : float
-        mm.
-
-    Returns
-    -------
-    SimpleITK.BSplineTransform
-    """
-    sitk = _sitk()
-    size = np.asarray(image.GetSize(), dtype=float)
-    extent = (size - 1.0) * np.asarray(image.GetSpacing())
-    mesh = [max(1, int(round(e / control_point_spacing))) for e in extent]
-    return sitk.BSplineTransformInitializer(image, mesh, 3)
-
-
-def _register(fixed_image, moving_image, settings: CineTrackingSettings, initial=None, mask=None):
-    """The B-spline transform fitted from ``fixed`` to ``moving``, started from ``initial``.
-
-    ``initial`` is a transform fitted on a frame of the same grid (same control points),
-    whose parameters are the starting point; None starts from the identity. ``mask``
-    (an 8-bit SimpleITK image of 0 and 1 on the fixed grid, :func:`_mask_image`, or None)
-    restricts the metric's samples to its voxels, ``sampling_percentage`` then being a
-    fraction of those.
-    """
-    sitk = _sitk()
-    size = np.asarray(fixed_image.GetSize(), dtype=float)
-    transform = identity_bspline(fixed_image, settings.control_point_spacing)
-    if initial is not None:
-        transform.SetParameters(initial.GetParameters())
-    method = sitk.ImageRegistrationMethod()
-    if settings.metric == "mean_squares":
-        method.SetMetricAsMeanSquares()
-    else:
-        method.SetMetricAsMattesMutualInformation(numberOfHistogramBins=settings.histogram_bins)
-    if settings.image_gradient == "central_difference":  # not ITK's smoothed default
-        method.MetricUseMovingImageGradientFilterOff()
-        method.MetricUseFixedImageGradientFilterOff()
-    if settings.sampling_percentage is None:
-        method.SetMetricSamplingStrategy(method.NONE)
-    else:
-        method.SetMetricSamplingStrategy(method.RANDOM)
-        fraction = float(settings.sampling_percentage)
-        if mask is not None:  # ITK draws from every voxel, then drops those outside
-            inside = float(sitk.GetArrayViewFromImage(mask).mean())
-            fraction = min(1.0, fraction / inside)
-        # SimpleITK reads a seed of 0 as "seed from the wall clock": shift by one
-        method.SetMetricSamplingPercentage(fraction, int(settings.seed) + 1)
-    if mask is not None:
-        method.SetMetricFixedMask(mask)
-    method.SetInterpolator(sitk.sitkLinear)
-    if settings.optimizer == "lbfgsb":
-        method.SetOptimizerAsLBFGSB(
-            gradientConvergenceTolerance=1e-6,
-            numberOfIterations=settings.iterations,
-            maximumNumberOfCorrections=7,
-            maximumNumberOfFunctionEvaluations=4 * settings.iterations,
-            costFunctionConvergenceFactor=1e7,
-        )
-    else:
-        method.SetOptimizerAsGradientDescent(
-            learningRate=1.0,
-            numberOfIterations=settings.iterations,
-            convergenceMinimumValue=1e-7,
-            convergenceWindowSize=10,
-            estimateLearningRate=method.EachIteration,
-        )
-        method.SetOptimizerScalesFromPhysicalShift()
-    levels = len(settings.shrink_factors)
-    # a level may not shrink an axis below 4 voxels (short-axis stacks have few slices)
-    smallest = int(size.min())
-    shrink = [max(1, min(s, smallest // 4)) for s in settings.shrink_factors]
-    method.SetShrinkFactorsPerLevel(shrink)
-    method.SetSmoothingSigmasPerLevel(list(settings.smoothing_sigmas[:levels]))
-    method.SmoothingSigmasAreSpecifiedInPhysicalUnitsOn()
-    method.SetInitialTransform(transform, inPlace=True)
-    method.SetNumberOfThreads(int(settings.threads))
-    method.Execute(fixed_image, moving_image)
-    return transform
 
 
 def register_frames(
@@ -184,11 +97,13 @@ def register_frames(
 
     Returns
     -------
-    SimpleITK.BSplineTransform
+    SimpleITK.BSplineTransform or SimpleITK.CompositeTransform
         ``T`` with ``moving(T(x)) ~ fixed(x)``: ``T.TransformPoint(x)`` maps a world point
         ``x`` of the fixed frame to the same material point in the moving frame (points
-        move forward from ``fixed`` to ``moving``). Its domain is the fixed image's
-        extent; outside it ``T`` is the identity.
+        move forward from ``fixed`` to ``moving``). The B-spline's domain is the fixed
+        image's extent; outside it the B-spline is the identity. With
+        ``settings.affine_stage``, the composite ``A(B(x))`` of an affine ``A`` and the
+        B-spline ``B`` (:mod:`.cine_registration`).
 
     Raises
     ------
