@@ -321,9 +321,10 @@ class KernelLandmarkSpace(Connection):
         return self._tangent(res.control_points, res.momenta)
 
     def log_near(self, point, other, start):
-        """``Log_T(S)`` registered from the momenta ``start`` (a warm start, see :meth:`register`)."""
+        """``Log_T(S)`` registered from the momenta ``start`` (a warm start, see :meth:`register`);
+        ``other`` a shape or a data term, as in :meth:`log`."""
         point = self.check_point(point, "point")
-        other = self.check_point(other, "other")
+        other = self._check_target(other, "other")
         res = self.register(point, other, initial_momenta=start)
         return self._tangent(res.control_points, res.momenta)
 

@@ -171,14 +171,16 @@ class RegistrationProblem:
         """
         key = x.tobytes()
         last_key, ev = self._last
-        if last_key != key:
+        cot = None
+        if last_key != key:  # the data term's value and gradient in one evaluation
             mu, c = self.unpack(x)
-            ev = self._record(
-                key, self.model.forward(self.template, c, mu, keep_stages=True, dense=self.dense)
-            )
+            flow = self.model.forward(self.template, c, mu, keep_stages=True, dense=self.dense)
+            data_value, cot = self.data_term.value_and_gradient(flow.deformed)
+            ev = self._record(key, flow, data_value)
         if ev.grad_mu is None:
             flow = ev.flow_pass
-            _, cot = self.data_term.value_and_gradient(flow.deformed)
+            if cot is None:  # the value alone was asked at this x before
+                _, cot = self.data_term.value_and_gradient(flow.deformed)
             g_c, g_mu = self.model.adjoint(flow, cot)
             self.n_flow_evaluations += 1
             alpha2 = self.alpha**2
@@ -191,10 +193,14 @@ class RegistrationProblem:
             ev.grad_x = self.to_variables_gradient(ev.grad_c, ev.grad_mu)
         return ev.value / self.scale, ev.grad_x / self.scale
 
-    def _record(self, key: bytes, flow: FlowPass) -> Evaluation:
-        """Keep the forward pass ``flow`` at the variables of bytes ``key`` as the latest."""
+    def _record(self, key: bytes, flow: FlowPass, data_value: float | None = None) -> Evaluation:
+        """Keep the forward pass ``flow`` at the variables of bytes ``key`` as the latest.
+
+        ``data_value`` is the data term's value at ``flow.deformed`` when already known.
+        """
         self.n_flow_evaluations += 1
-        data_value = self.data_term.value(flow.deformed)
+        if data_value is None:
+            data_value = self.data_term.value(flow.deformed)
         ev = Evaluation(data_value + self.alpha**2 * flow.norm_sq, None, None, flow)
         self._last = (key, ev)
         return ev

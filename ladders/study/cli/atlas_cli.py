@@ -12,6 +12,7 @@ writes the last iterate and its record (``"interrupted": true``) before it stops
 
 from __future__ import annotations
 
+import argparse
 import inspect
 import sys
 
@@ -44,6 +45,22 @@ def _library_default(name: str, build: bool = False):
 
     function = build_atlas if build else estimate_atlas
     return inspect.signature(function).parameters[name].default
+
+
+def _coarse_default() -> float:
+    from ..preparation import CorrespondenceSettings
+
+    return CorrespondenceSettings().atlas_coarse_factor
+
+
+def _coarse_factor(text: str) -> float:
+    """A finite number ``>= 1`` (the data term's width over ``--sigma-w``)."""
+    value = positive_float(text)
+    if value < 1.0:
+        raise argparse.ArgumentTypeError(
+            f"expected a number >= 1 (1: no coarse stage), got {text!r}"
+        )
+    return value
 
 
 def _subset_count(text: str) -> int | None:
@@ -97,6 +114,13 @@ def add_atlas_parser(sub) -> None:
         "correspondence; 'varifold' and 'current' compare surfaces in any case",
     )
     add_data_term_arguments(p)
+    p.add_argument(
+        "--coarse-factor", type=_coarse_factor, default=_coarse_default(),
+        help="register the atlas onto each subject with a data term this many times wider "
+        "than --sigma-w first, then at --sigma-w from there (coarse to fine; 1: directly, "
+        "which lets far subjects fall into local minima and the objective rise over the "
+        "iterations: docs/evidence/atlas_evidence.md)",
+    )  # fmt: skip
     add_landmark_arguments(p)
     p.add_argument(
         "--tol",
@@ -170,7 +194,9 @@ def run_atlas_command(args) -> int:
     try:
         with parallel_backend(args, "atlas"):
             run = build_atlas(
-                args.meshes, args.output, correspondence_settings(args), start=args.start,
+                args.meshes, args.output,
+                correspondence_settings(args, atlas_coarse_factor=args.coarse_factor),
+                start=args.start,
                 term=args.term, tol=args.tol, max_iter=args.max_iter, inputs=inputs,
                 progress=None if args.no_progress else _progress,
                 landmarks=landmarks_argument(args, args.meshes), subset=args.subset,

@@ -6,11 +6,12 @@ records per subject (its 4 x 4 matrix). With corresponding points the
 least-squares transform has a closed form (:func:`procrustes`: Kabsch and
 Umeyama, SVD of the cross-covariance with the sign of the last singular
 vector fixed). Without correspondence, :func:`icp_align` runs the iterative
-closest point algorithm of :func:`trimesh.registration.icp` (point-to-surface
-with the target given as a mesh) from several starts: the centroids matched
-with the input's own orientation, and with the principal axes matched in each
-of their four orientations that make a rotation, each run point to point on the target's vertices and triangle
-centres (fast), the best one refined point to surface. Two meshes whose shapes differ are
+closest point algorithm from several starts: the centroids matched with the
+input's own orientation, and with the principal axes matched in each of their
+four orientations that make a rotation, each run point to point on the target's
+vertices and triangle centres (:func:`trimesh.registration.icp`, a k-d tree),
+the best one refined point to surface (closest points on the triangles by
+libigl's AABB tree, :func:`~ladders.study.surface_queries.closest_points`). Two meshes whose shapes differ are
 then aligned by their surfaces, not by an anatomical frame; a corresponded
 pair is best aligned again by :func:`procrustes` on its vertices. A rotation
 that leaves the target surface unchanged (e.g. about the axis of an
@@ -216,7 +217,7 @@ def icp_align(
 ) -> tuple[SimilarityTransform, float]:
     """Align a mesh onto another surface by ICP (no correspondence needed).
 
-    :func:`trimesh.registration.icp` moves the source vertices onto the closest
+    ICP moves the source vertices onto the closest
     points of the target, from ``initial`` or, by default, from the five starts
     of the module docstring (point to point, keeping the lowest cost), and
     refines the best point to surface. On a near surface of revolution the
@@ -249,10 +250,9 @@ def icp_align(
     """
     sv, sf = check_mesh(source_vertices, source_faces, "icp_align: source")
     tv, tf = check_mesh(target_vertices, target_faces, "icp_align: target")
-    target_mesh = trimesh.Trimesh(tv, tf, process=False)
     starts = [initial] if initial is not None else list(icp_starts(sv, sf, tv, tf))
     # every start by point-to-point ICP (k-d tree) on the target's vertices and triangle
-    # centres, then the best one refined point-to-surface (R-tree, slower)
+    # centres, then the best one refined point-to-surface (AABB tree)
     cloud = np.vstack([tv, tv[tf].mean(axis=1)])
     best = None
     for start in starts:
@@ -267,13 +267,32 @@ def icp_align(
         distance = spatial.cKDTree(cloud).query(transform.apply(sv))[0]
         return transform, float(distance.mean())
     # the refinement stops when the mean squared distance changes by less than 1e-6 of itself
-    matrix, _, _ = trimesh.registration.icp(
-        sv, target_mesh, initial=best[0], threshold=max(threshold, 1e-6 * best[1]),
-        max_iterations=max_iterations, reflection=False, scale=scale,
+    transform = _refine_to_surface(
+        sv, tv, tf, SimilarityTransform.from_matrix(best[0]), scale=scale,
+        threshold=max(threshold, 1e-6 * best[1]), max_iterations=max_iterations,
     )  # fmt: skip
-    transform = SimilarityTransform.from_matrix(matrix)
     distance = closest_points(transform.apply(sv), tv, tf)[1]
     return transform, float(distance.mean())
+
+
+def _refine_to_surface(sv, tv, tf, transform, *, scale, threshold, max_iterations):
+    """Point-to-surface ICP from ``transform``: closest points (libigl's AABB tree), Procrustes.
+
+    Each step moves the source onto the closest points of the target surface by the
+    least-squares transform; it stops when the mean squared distance after the step
+    falls by less than ``threshold``.
+    """
+    previous = np.inf
+    for _ in range(max_iterations):
+        moved = transform.apply(sv)
+        closest = closest_points(moved, tv, tf)[0]
+        step = procrustes(moved, closest, scale=scale)
+        transform = step.compose(transform)
+        cost = float(np.mean(np.sum((step.apply(moved) - closest) ** 2, axis=1)))
+        if previous - cost < threshold:
+            break
+        previous = cost
+    return transform
 
 
 def random_rigid_transform(

@@ -33,7 +33,7 @@ from manifolds.validation import check_float, check_int
 
 from ..batch import run_batch
 from .alignment import SimilarityTransform, procrustes
-from .atlas_registrations import AtlasLogs
+from .atlas_registrations import AtlasLogs, CoarseToFine
 from .correspondence_settings import CorrespondenceSettings
 from .landmarks import Landmarks
 from .rigid_fit import fit_rigid
@@ -145,7 +145,8 @@ def _aligned_targets(
 ):
     """The rigid alignment of each mesh onto the start (Procrustes when they correspond,
     else :func:`fit_rigid` through the batch runner, with landmarks where given) and the
-    registration targets (the surface term's, or the vertices)."""
+    registration targets (the surface term's, coarse to fine with
+    ``settings.atlas_coarse_factor`` above 1, or the vertices)."""
     if not align:
         transforms = [SimilarityTransform.identity() for _ in meshes]
     elif corresponding:
@@ -157,7 +158,13 @@ def _aligned_targets(
     moved = [(t.apply(v), f) for t, (v, f) in zip(transforms, meshes)]
     if not surface:
         return transforms, np.stack([v for v, _ in moved])
-    return transforms, [settings.data_term_for(v, f, start_f) for v, f in moved]
+    if settings.atlas_coarse_factor == 1.0:
+        return transforms, [settings.data_term_for(v, f, start_f) for v, f in moved]
+    return transforms, [
+        CoarseToFine(settings.data_term_for(v, f, start_f, settings.atlas_coarse_factor),
+                     settings.data_term_for(v, f, start_f))
+        for v, f in moved
+    ]  # fmt: skip
 
 
 def estimate_atlas(

@@ -6,7 +6,9 @@ atlas onto every subject; the registrations are independent of each other, so
 process (``jobs=1``), in ``jobs`` local processes, or on a Dask cluster when the caller
 sets ``joblib.parallel_config(backend="dask")``. It is the ``map_logs`` of
 :func:`ladders.frechet_mean`, and it keeps each registration's objective, so that the
-atlas's report of the objective per iteration registers nothing again. Every
+atlas's report of the objective per iteration registers nothing again. A target may be
+a :class:`CoarseToFine` pair of surface terms: the atlas is then registered onto the
+wide one first and onto the narrow one from there (:func:`register_atlas_onto`). Every
 registration runs with BLAS on one thread and the same settings whatever ``jobs`` is,
 so the atlas is the same, to round-off, on any number of workers.
 """
@@ -18,11 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from manifolds.data_terms.base import DataTerm
 from manifolds.lddmm import LDDMMLandmarks, RegistrationSettings
 
 from ..batch import run_batch
 
-__all__ = ["AtlasLogs", "AtlasRegistration", "register_atlas_onto"]
+__all__ = ["AtlasLogs", "AtlasRegistration", "CoarseToFine", "register_atlas_onto"]
 
 
 @dataclass(frozen=True)
@@ -47,16 +50,42 @@ class AtlasRegistration:
     cpu_seconds: float
 
 
+@dataclass(frozen=True)
+class CoarseToFine:
+    """A registration target matched in two stages: ``coarse``, then ``fine`` from there.
+
+    Attributes
+    ----------
+    coarse, fine : DataTerm
+        Two data terms towards one subject's surface, of a wide and of the narrow kernel
+        (:meth:`~.correspondence_settings.CorrespondenceSettings.data_term_for`). The
+        log and the objective are those of the registration onto ``fine``.
+    """
+
+    coarse: DataTerm
+    fine: DataTerm
+
+
 def register_atlas_onto(
     atlas, target, alpha: float, settings: RegistrationSettings
 ) -> AtlasRegistration:
-    """Register ``atlas`` (shape ``(k, 3)``) onto ``target`` (a shape in correspondence or
-    a data term) in the LDDMM landmark space of ``alpha`` and ``settings`` (the batch's
-    work function)."""
+    """Register ``atlas`` (shape ``(k, 3)``) onto ``target`` (a shape in correspondence, a
+    data term, or a :class:`CoarseToFine` pair) in the LDDMM landmark space of ``alpha``
+    and ``settings`` (the batch's work function).
+
+    A :class:`CoarseToFine` target is registered onto its ``coarse`` term, then onto its
+    ``fine`` term from the momenta found (a warm start at the same control points): the
+    wide kernel sees a subject's whole surface from afar, the narrow one its details.
+    """
     start = time.process_time()
     space = LDDMMLandmarks(len(atlas), 3, alpha=alpha, settings=settings, cache_size=1)
-    log = space.log(atlas, target)
-    res = space.register(atlas, target)  # the same registration, from the cache
+    if isinstance(target, CoarseToFine):
+        first = space.register(atlas, target.coarse).momenta
+        log = space.log_near(atlas, target.fine, first)
+        res = space.register(atlas, target.fine, initial_momenta=first)  # from the cache
+    else:
+        log = space.log(atlas, target)
+        res = space.register(atlas, target)  # the same registration, from the cache
     return AtlasRegistration(np.asarray(log), float(res.objective), bool(res.converged),
                              time.process_time() - start)  # fmt: skip
 

@@ -96,6 +96,13 @@ class CorrespondenceSettings:
     flag_mean_distance, flag_hausdorff : float
         A corresponded mesh farther than these from its input (mean surface
         distance, Hausdorff distance) is flagged for inspection.
+    atlas_coarse_factor : float
+        The atlas's registrations (:mod:`.atlas_registrations`) first match the surfaces
+        with a data term this many times wider than ``sigma_w``, then at ``sigma_w`` from
+        there (coarse to fine); 1: at ``sigma_w`` directly. A subject far from the current
+        atlas otherwise falls into a local minimum of the narrow term, which subjects do
+        changes between iterations, and the atlas's objective rises over its iterations
+        (``docs/evidence/atlas_evidence.md``). The correspondence registers directly.
     flag_axial_spread : float
         Without landmarks, a fit whose turn about the long axis the surface leaves
         undetermined over more than this many degrees is flagged.
@@ -123,6 +130,7 @@ class CorrespondenceSettings:
     es_correspondence: str = "normal"
     normal_max_distance: float | None = None
     landmark_tolerance: float = 10.0
+    atlas_coarse_factor: float = 3.0
     flag_axial_spread: float = 10.0
     flag_landmark_disagreement: float = 20.0
 
@@ -135,6 +143,7 @@ class CorrespondenceSettings:
                 getattr(self, key), f"{name}: {key}", minimum=minimum, strict=key != "alpha"
             )
         check_float(self.anchor_weight, f"{name}: anchor_weight", minimum=0.0)
+        check_float(self.atlas_coarse_factor, f"{name}: atlas_coarse_factor", minimum=1.0)
         for key in ("flag_hausdorff", "landmark_tolerance", "flag_axial_spread",
                     "flag_landmark_disagreement"):  # fmt: skip
             check_float(getattr(self, key), f"{name}: {key}", minimum=0.0, strict=True)
@@ -181,8 +190,9 @@ class CorrespondenceSettings:
         text = json.dumps(payload, sort_keys=True, default=repr)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
-    def data_term_for(self, vertices, faces, template_faces):
-        """The data term towards the mesh ``(vertices, faces)`` for a template with ``template_faces``."""
+    def data_term_for(self, vertices, faces, template_faces, width_factor: float = 1.0):
+        """The data term towards the mesh ``(vertices, faces)`` for a template with
+        ``template_faces``, of kernel width ``width_factor * sigma_w``."""
         return _TERMS[self.data_term](
-            vertices, faces, template_faces, self.sigma_w, weight=self.weight
+            vertices, faces, template_faces, width_factor * self.sigma_w, weight=self.weight
         )
