@@ -12,7 +12,7 @@ measured against :func:`~ladders.study.cohort.motion_forward`. The full-size ver
 Without tags a smooth wall shows its motion along its normal only: the B-spline, moved
 by gradient steps, moves the wall along its ED normals and leaves out the shortening
 of the mid-wall; the affine stage (``affine_stage``) fits it from the whole wall first.
-The full-size version is ``bench_cine_tag_planes.py --isotropic``.
+The full-size version is ``bench_cine_isotropic.py``.
 """
 
 from __future__ import annotations
