@@ -102,7 +102,9 @@ def _measure_seed(seed: int) -> dict:
             stopped, sizes = _check(atlas, faces, s.ed, s.es, f)
             row[measure] = (stopped, max(m.angle for m in sizes.values()), sizes["ed"].offset,
                             sizes["es"].offset)  # fmt: skip
-            moved = zip(_variants(atlas, faces, s.ed, centre), _variants(atlas, faces, s.es, centre))
+            moved = zip(
+                _variants(atlas, faces, s.ed, centre), _variants(atlas, faces, s.es, centre)
+            )
             for (kind, ed), (_, es) in moved:  # the whole subject moved
                 hit, sizes = _check(atlas, faces, ed, es, f)
                 row.setdefault((measure, kind), []).append(hit)
