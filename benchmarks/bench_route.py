@@ -24,8 +24,9 @@ recommended settings, as written.
   (the permutation test ``symladders analyze --design`` runs on it, the motion read once).
 * **The rerun**: the same command again; every step is reused.
 
-The tables go to ``docs/generated/route_cohort.md`` and, once marked there, the region
-``generated/route_cohort`` of ``docs/evidence/route_evidence.md``.
+The tables go to ``docs/generated/route_cohort.md`` (with ``--imbalance`` other than 1,
+``route_cohort_imbalance_<value without its point>.md``, e.g. ``..._05`` for 0.5) and,
+once marked there, the regions of the same names in ``docs/evidence/route_evidence.md``.
 """
 
 from __future__ import annotations
@@ -219,7 +220,11 @@ def main(argv=None) -> None:
     table = "\n".join(lines)
     print(table)
     if args.publish:
-        publish("route_cohort", table, "python benchmarks/bench_route.py --publish")
+        name, flag = "route_cohort", ""
+        if args.imbalance != 1.0:  # a table of its own per imbalance
+            name = f"route_cohort_imbalance_{args.imbalance:g}".replace(".", "")
+            flag = f" --imbalance {args.imbalance:g}"
+        publish(name, table, f"python benchmarks/bench_route.py{flag} --publish")
 
 
 if __name__ == "__main__":
