@@ -32,6 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from bench_atlas_scale import first_inputs  # noqa: E402
 from bench_route import _cohort  # noqa: E402
 from generated_tables import machine, publish  # noqa: E402
 
@@ -72,13 +73,7 @@ def atlas(folder: Path, work: Path, n: int, factor: float, iterations: int, jobs
     stored = work / "atlases" / f"factor_{factor:g}.json"
     if stored.is_file():
         return json.loads(stored.read_text())
-    from ladders.study.preparation import read_atlas_inputs
-
-    everyone = read_atlas_inputs(folder)
-    import dataclasses
-
-    inputs = dataclasses.replace(everyone, names=everyone.names[:n], meshes=everyone.meshes[:n],
-                                 files=everyone.files[:n])  # fmt: skip
+    inputs = first_inputs(folder, n)
     table = read_landmarks(folder / "landmarks.csv")
     start = time.perf_counter()
     run = build_atlas(

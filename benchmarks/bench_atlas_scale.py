@@ -165,10 +165,15 @@ def cohort(work: Path, n: int) -> dict:
     return _stored(work / "times" / "mesh.json", lambda: {**_cli(MESH, work), "subjects": n})
 
 
-def _inputs(work: Path, n: int):
-    everyone = read_atlas_inputs(work / "meshes")
+def first_inputs(folder: Path, n: int):
+    """The atlas inputs of the first ``n`` subjects of a folder of meshes."""
+    everyone = read_atlas_inputs(folder)
     return dataclasses.replace(everyone, names=everyone.names[:n], meshes=everyone.meshes[:n],
                                files=everyone.files[:n])  # fmt: skip
+
+
+def _inputs(work: Path, n: int):
+    return first_inputs(work / "meshes", n)
 
 
 def timed_atlas(work: Path, name: str, inputs, jobs: int, **options) -> dict:
